@@ -1,0 +1,86 @@
+#pragma once
+// The closed set of BSDFs, dispatched through std::variant (no virtual calls in the inner loop).
+//
+// Conventions (shared by every model and every caller):
+// - Directions are in the local shading frame (z = shading normal), both pointing away from the
+//   surface: wo towards the previous vertex (the camera side for radiance), wi towards the next.
+// - eval() returns f(wo, wi) WITHOUT the cosine factor.
+// - pdf_sa() is per unit solid angle around wi. Delta components have no density: eval() and
+//   pdf_sa() return 0 for them and only sample() can produce them.
+// - sample() returns weight = f * |cos(wi)| / pdf_sa for non-delta lobes; for a delta lobe it is the
+//   discrete weight (e.g. F / P(choose reflection)) and pdf_sa holds the discrete probability.
+// - TransportMode::Importance is used when tracing from lights (the adjoint BSDF); it drops the
+//   1/eta^2 radiance scaling at refraction.
+#include <cstdint>
+#include <optional>
+#include <variant>
+
+#include "math/frame.h"
+#include "math/vec.h"
+
+namespace omega {
+
+enum class TransportMode : uint8_t { Radiance, Importance };
+
+enum class MicrofacetType : uint8_t { GGX, Beckmann };
+
+// Lobe flags, also used by the full-path classifier (S = delta, D = everything else).
+enum LobeFlags : uint8_t {
+    kLobeNone = 0,
+    kLobeReflection = 1 << 0,
+    kLobeTransmission = 1 << 1,
+    kLobeDiffuse = 1 << 2,
+    kLobeGlossy = 1 << 3,
+    kLobeDelta = 1 << 4,
+};
+
+struct BsdfSample {
+    Rgb weight;             // f |cos wi| / pdf, or the discrete weight for a delta lobe
+    Vec3 wi;                // local frame
+    float pdf_sa = 0;       // solid angle density, or the discrete probability for a delta lobe
+    float eta = 1;          // relative IOR along the sampled direction (1 for reflection)
+    uint8_t lobe = kLobeNone;
+    bool is_delta() const { return lobe & kLobeDelta; }
+};
+
+struct DiffuseBsdf {
+    Rgb reflectance{0.5f, 0.5f, 0.5f};
+    bool two_sided = true;
+};
+
+// Conductor: alpha == 0 is a smooth mirror. Without eta/k (has_ior false) Fresnel is 1.
+struct ConductorBsdf {
+    Rgb eta{0.f, 0.f, 0.f}, k{1.f, 1.f, 1.f};
+    bool has_ior = false;
+    Rgb specular_reflectance{1.f, 1.f, 1.f};
+    float alpha_u = 0, alpha_v = 0;
+    MicrofacetType distribution = MicrofacetType::GGX;
+    bool two_sided = true;
+};
+
+// Dielectric interface; eta = int_ior / ext_ior. alpha == 0 is smooth.
+struct DielectricBsdf {
+    float eta = 1.5f;
+    Rgb specular_reflectance{1.f, 1.f, 1.f};
+    Rgb specular_transmittance{1.f, 1.f, 1.f};
+    float alpha_u = 0, alpha_v = 0;
+    MicrofacetType distribution = MicrofacetType::GGX;
+};
+
+// Absorbs everything; used for emitters that should not reflect.
+struct BlackBsdf {};
+
+using Bsdf = std::variant<DiffuseBsdf, ConductorBsdf, DielectricBsdf, BlackBsdf>;
+
+Rgb bsdf_eval(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
+float bsdf_pdf_sa(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
+std::optional<BsdfSample> bsdf_sample(const Bsdf& b, const Vec3& wo, float uc, Vec2 u, TransportMode mode);
+// Union of the lobes this BSDF can ever produce (for classification and skipping work).
+uint8_t bsdf_lobes(const Bsdf& b);
+inline bool bsdf_is_delta_only(const Bsdf& b) {
+    uint8_t l = bsdf_lobes(b);
+    return l != kLobeNone && (l & (kLobeDiffuse | kLobeGlossy)) == 0;
+}
+inline bool bsdf_has_nondelta(const Bsdf& b) { return bsdf_lobes(b) & (kLobeDiffuse | kLobeGlossy); }
+
+}  // namespace omega

@@ -1,0 +1,37 @@
+#include "sampling/distribution.h"
+
+#include <algorithm>
+
+namespace omega {
+
+DiscreteDistribution::DiscreteDistribution(const std::vector<double>& weights) {
+    double sum = 0;
+    for (double w : weights) sum += std::max(0.0, w);
+    total_ = sum;
+    if (weights.empty() || !(sum > 0)) return;
+    pmf_.resize(weights.size());
+    cdf_.resize(weights.size());
+    double acc = 0;
+    for (size_t i = 0; i < weights.size(); ++i) {
+        double p = std::max(0.0, weights[i]) / sum;
+        pmf_[i] = float(p);
+        acc += p;
+        cdf_[i] = acc;
+    }
+    cdf_.back() = 1.0;
+}
+
+size_t DiscreteDistribution::sample(float u, float* u_remapped) const {
+    auto it = std::upper_bound(cdf_.begin(), cdf_.end(), double(u));
+    size_t i = size_t(std::min<ptrdiff_t>(it - cdf_.begin(), ptrdiff_t(cdf_.size()) - 1));
+    // Never return a zero-probability item.
+    while (pmf_[i] == 0 && i > 0) --i;
+    if (u_remapped) {
+        double lo = i == 0 ? 0.0 : cdf_[i - 1];
+        double w = cdf_[i] - lo;
+        *u_remapped = w > 0 ? std::min(float((double(u) - lo) / w), 0x1.fffffep-1f) : 0.f;
+    }
+    return i;
+}
+
+}  // namespace omega

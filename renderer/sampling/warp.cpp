@@ -1,0 +1,77 @@
+#include "sampling/warp.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace omega {
+
+// Shirley-Chiu concentric map: low distortion, keeps stratification.
+Vec2 square_to_uniform_disk_concentric(Vec2 u) {
+    float ox = 2.f * u.x - 1.f, oy = 2.f * u.y - 1.f;
+    if (ox == 0 && oy == 0) return {0, 0};
+    float r, theta;
+    if (std::abs(ox) > std::abs(oy)) {
+        r = ox;
+        theta = (kPi / 4.f) * (oy / ox);
+    } else {
+        r = oy;
+        theta = (kPi / 2.f) - (kPi / 4.f) * (ox / oy);
+    }
+    return {r * std::cos(theta), r * std::sin(theta)};
+}
+
+Vec3 square_to_cosine_hemisphere(Vec2 u) {
+    Vec2 d = square_to_uniform_disk_concentric(u);
+    float z = safe_sqrt(1.f - d.x * d.x - d.y * d.y);
+    // Keep z strictly positive so the pdf never vanishes for a sampled direction.
+    return {d.x, d.y, std::max(z, 1e-7f)};
+}
+
+Vec3 square_to_uniform_sphere(Vec2 u) {
+    float z = 1.f - 2.f * u.x;
+    float r = safe_sqrt(1.f - z * z);
+    float phi = 2.f * kPi * u.y;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+Vec3 square_to_uniform_hemisphere(Vec2 u) {
+    float z = u.x;
+    float r = safe_sqrt(1.f - z * z);
+    float phi = 2.f * kPi * u.y;
+    return {r * std::cos(phi), r * std::sin(phi), std::max(z, 1e-7f)};
+}
+
+Vec3 square_to_uniform_cone(Vec2 u, float cos_max) {
+    // 1 - cos computed directly keeps precision for tiny cones (distant small lights).
+    float one_minus_cos_max = 1.f - cos_max;
+    float one_minus_cos = u.x * one_minus_cos_max;
+    float cos_t = 1.f - one_minus_cos;
+    float sin_t = safe_sqrt(one_minus_cos * (2.f - one_minus_cos));
+    float phi = 2.f * kPi * u.y;
+    return {sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
+}
+
+float uniform_cone_pdf_sa(const Vec3& w, float cos_max) {
+    if (w.z < cos_max) return 0.f;
+    return 1.f / (2.f * kPi * (1.f - cos_max));
+}
+
+Vec2 square_to_uniform_triangle(Vec2 u) {
+    float b0, b1;
+    if (u.x < u.y) {
+        b0 = u.x / 2.f;
+        b1 = u.y - b0;
+    } else {
+        b1 = u.y / 2.f;
+        b0 = u.x - b1;
+    }
+    return {b0, b1};
+}
+
+float sample_tent(float u) {
+    // Invert the CDF of each half.
+    if (u < 0.5f) return -1.f + std::sqrt(2.f * u);
+    return 1.f - std::sqrt(2.f - 2.f * u);
+}
+
+}  // namespace omega

@@ -1,0 +1,116 @@
+#pragma once
+// What a scene file says, after parsing and validation, before any resource is loaded.
+// Parsing (scene_parser) fills this; resource loading (scene_builder) turns it into a Scene.
+// Every entry keeps the file and line it came from so later errors can point back at it.
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bsdf/bsdf.h"
+#include "math/transform.h"
+#include "math/vec.h"
+
+namespace omega {
+
+struct SourceLoc {
+    std::string file;
+    int line = 0;  // 1-based; 0 when unknown
+};
+
+enum class IntegratorType { Path, Light, Bdpt };
+
+struct IntegratorDesc {
+    IntegratorType type = IntegratorType::Path;
+    int max_depth = -1;  // edges; -1 = unbounded (Russian roulette ends paths)
+    int rr_depth = 5;    // edges after which Russian roulette starts
+};
+
+enum class FilterType { Box, Tent, Gaussian };
+
+struct FilmDesc {
+    int width = 512, height = 512;
+    FilterType filter = FilterType::Box;
+    float filter_radius = 0.5f;  // pixels; box 0.5, tent 1, gaussian 2 (stddev 0.5) by default
+    float gaussian_stddev = 0.5f;
+    // [x0, y0, x1, y1) in pixels; defaults to the whole film.
+    std::array<int, 4> crop{0, 0, 0, 0};
+    bool has_crop = false;
+};
+
+// When a render stops: whichever given condition is met first. None given = 64 spp.
+struct HaltDesc {
+    std::optional<long long> spp;
+    std::optional<double> time_s;
+    std::optional<double> target_error;
+};
+
+enum class SensorType { Perspective, ThinLens, Orthographic };
+
+struct SensorDesc {
+    SensorType type = SensorType::Perspective;
+    float fov = 45.f;        // degrees
+    char fov_axis = 'x';     // 'x' or 'y'
+    Mat4 to_world;           // local frame: looks along +z, +y up, +x is the image's left
+    float aperture_radius = 0.f;  // thin_lens, world units
+    float focus_distance = 1.f;   // thin_lens, world units
+    float near_clip = 0.f;        // world units along the ray
+    FilmDesc film;
+    HaltDesc halt;
+    SourceLoc loc;
+};
+
+struct MaterialDesc {
+    std::string name;
+    Bsdf bsdf;
+    SourceLoc loc;
+};
+
+struct EmitterDesc {
+    Rgb radiance{0.f, 0.f, 0.f};  // W / (m^2 sr)
+    bool two_sided = false;       // emit on both sides; otherwise only on the +normal side
+};
+
+enum class ShapeType { Mesh, Rectangle, Cube, Sphere, Disk };
+
+struct ShapeDesc {
+    ShapeType type = ShapeType::Rectangle;
+    Mat4 to_world;
+    std::string file;          // mesh: absolute path, checked to exist at parse time
+    Vec3d center{0, 0, 0};     // sphere: in addition to to_world
+    double radius = 1.0;       // sphere
+    std::string material;      // key into SceneDesc::materials
+    std::optional<EmitterDesc> emitter;
+    bool flip_normals = false;
+    bool face_normals = false;       // mesh: ignore the file's vertex normals
+    bool drop_degenerate = false;    // mesh: skip zero-area triangles instead of failing
+    SourceLoc loc;
+};
+
+enum class LightType { Point, Spot, Directional, Constant };
+
+struct LightDesc {
+    LightType type = LightType::Point;
+    Vec3d position{0, 0, 0};        // point
+    Rgb intensity{1.f, 1.f, 1.f};   // point, spot: W/sr
+    Mat4 to_world;                  // spot: looks along local +z
+    float cutoff_angle = 20.f;      // spot, degrees
+    float beam_width = 15.f;        // spot, degrees (default 3/4 of cutoff)
+    Vec3d direction{0, 0, -1};      // directional: direction of travel
+    Rgb irradiance{1.f, 1.f, 1.f};  // directional: W/m^2 on a plane facing it
+    Rgb radiance{1.f, 1.f, 1.f};    // constant environment: W/(m^2 sr)
+    SourceLoc loc;
+};
+
+struct SceneDesc {
+    std::string path;  // the scene file, for messages and relative paths
+    IntegratorDesc integrator;
+    SensorDesc sensor;
+    std::map<std::string, MaterialDesc> materials;
+    std::vector<ShapeDesc> shapes;
+    std::vector<LightDesc> lights;
+    std::vector<std::string> warnings;  // things the parser accepted but wants the user to know
+};
+
+}  // namespace omega
