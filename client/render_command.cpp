@@ -1,0 +1,141 @@
+#include "render_command.h"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "film/film.h"
+#include "integrator/render_session.h"
+#include "progress_bar.h"
+#include "scene/scene.h"
+#include "scene/scene_error.h"
+#include "scene/scene_parser.h"
+
+namespace omega {
+
+namespace {
+
+const char* integrator_name(IntegratorType t) {
+    switch (t) {
+        case IntegratorType::Path: return "path";
+        case IntegratorType::Light: return "light";
+        case IntegratorType::Bdpt: return "bdpt";
+    }
+    return "?";
+}
+
+std::string default_output(const std::string& scene) {
+    return std::filesystem::path(scene).stem().string() + ".exr";
+}
+
+std::string human_rate(double v) {
+    if (v >= 1e9) return fmt::format("{:.2f}G", v / 1e9);
+    if (v >= 1e6) return fmt::format("{:.2f}M", v / 1e6);
+    if (v >= 1e3) return fmt::format("{:.1f}k", v / 1e3);
+    return fmt::format("{:.0f}", v);
+}
+
+}  // namespace
+
+void add_render_command(CLI::App& app, RenderArgs& a) {
+    auto* cmd = app.add_subcommand("render", "Render a scene locally to an EXR file");
+    cmd->add_option("scene", a.scene, "Scene file (YAML, format v1)")->required();
+    cmd->add_option("-o,--output", a.output, "Output EXR (default: the scene's name with .exr)");
+    auto* spp = cmd->add_option("--spp", a.spp, "Samples per pixel")->check(CLI::PositiveNumber);
+    auto* time = cmd->add_option("--time", a.time_s, "Render for this many seconds")->check(CLI::PositiveNumber);
+    auto* err = cmd->add_option("--target-error", a.target_error, "Stop at this estimated relative error")
+                    ->check(CLI::PositiveNumber);
+    spp->excludes(time)->excludes(err);
+    time->excludes(err);
+    cmd->add_option("--integrator", a.integrator, "path | light | bdpt (overrides the scene)")
+        ->check(CLI::IsMember({"path", "light", "bdpt"}));
+    cmd->add_option("--threads", a.threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--seed", a.seed, "Random seed (default 0)");
+    cmd->add_option("--report", a.report_csv, "Write one CSV row per pass to this file");
+    cmd->add_flag("-q,--quiet", a.quiet, "No progress output");
+}
+
+int run_render(const RenderArgs& a) {
+    SceneDesc desc;
+    std::unique_ptr<Scene> scene;
+    try {
+        desc = parse_scene_file(a.scene);
+        if (a.integrator == "path") desc.integrator.type = IntegratorType::Path;
+        if (a.integrator == "light") desc.integrator.type = IntegratorType::Light;
+        if (a.integrator == "bdpt") desc.integrator.type = IntegratorType::Bdpt;
+        scene = Scene::build(desc);
+    } catch (const SceneError& e) {
+        fmt::print(stderr, "omega: {}\n", e.what());
+        return 2;
+    }
+    for (const auto& w : desc.warnings) fmt::print(stderr, "omega: warning: {}\n", w);
+
+    RenderSettings rs;
+    rs.halt = desc.sensor.halt;
+    if (a.spp || a.time_s || a.target_error) rs.halt = HaltDesc{a.spp, a.time_s, a.target_error};
+    rs.threads = a.threads;
+    rs.seed = a.seed;
+    rs.integrator = desc.integrator;
+
+    std::unique_ptr<RenderSession> session;
+    try {
+        session = std::make_unique<RenderSession>(*scene, rs);
+    } catch (const std::invalid_argument& e) {
+        fmt::print(stderr, "omega: {}: {}\n", a.scene, e.what());
+        return 2;
+    }
+
+    std::ofstream csv;
+    if (!a.report_csv.empty()) {
+        csv.open(a.report_csv);
+        if (!csv) {
+            fmt::print(stderr, "omega: cannot write report '{}'\n", a.report_csv);
+            return 2;
+        }
+        csv << "pass,spp,elapsed_s,samples_per_s,rays_per_s,rel_error,image_mean,image_mean_stderr,nonfinite\n";
+    }
+
+    ProgressBar bar(stderr);
+    const HaltDesc& h = rs.halt;
+    PassReport last = session->run([&](const PassReport& r) {
+        if (csv)
+            csv << fmt::format("{},{},{:.6f},{:.6g},{:.6g},{:.6g},{:.9g},{:.6g},{}\n", r.pass, r.spp, r.elapsed_s,
+                               r.samples_per_s, r.rays_per_s, r.error.mean_rel_error, r.error.image_mean,
+                               r.error.image_mean_stderr, r.nonfinite)
+                << std::flush;
+        if (a.quiet) return;
+        double frac = -1;
+        if (h.spp) frac = double(r.spp) / double(*h.spp);
+        else if (h.time_s) frac = r.elapsed_s / *h.time_s;
+        else if (!h.target_error) frac = double(r.spp) / 64.0;
+        bar.update(frac, fmt::format("{} spp  {:.1f}s  err {:.4f}  {} samples/s{}", r.spp, r.elapsed_s,
+                                     r.error.mean_rel_error, human_rate(r.samples_per_s),
+                                     r.nonfinite ? fmt::format("  nonfinite {}", r.nonfinite) : ""));
+    });
+    bar.finish();
+
+    std::string out = a.output.empty() ? default_output(a.scene) : a.output;
+    ExrMeta meta;
+    meta.spp = last.spp;
+    meta.time_s = last.elapsed_s;
+    meta.integrator = integrator_name(desc.integrator.type);
+    meta.seed = a.seed;
+    meta.nonfinite = last.nonfinite;
+    meta.warnings = desc.warnings;
+    meta.rel_error = last.error.mean_rel_error;
+    try {
+        write_exr(out, session->film(), meta);
+    } catch (const std::exception& e) {
+        fmt::print(stderr, "omega: {}\n", e.what());
+        return 1;
+    }
+    fmt::print("{}: {} spp in {:.2f} s, {} samples/s, {} rays/s, rel. error {:.4f}, {} non-finite\n", out, last.spp,
+               last.elapsed_s, human_rate(last.samples_per_s), human_rate(last.rays_per_s), last.error.mean_rel_error,
+               last.nonfinite);
+    return 0;
+}
+
+}  // namespace omega

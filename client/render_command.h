@@ -1,0 +1,27 @@
+#pragma once
+// `omega render`: renders a scene locally with the renderer library.
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+
+namespace omega {
+
+struct RenderArgs {
+    std::string scene;
+    std::string output;
+    std::optional<long long> spp;
+    std::optional<double> time_s;
+    std::optional<double> target_error;
+    std::string integrator;
+    int threads = 0;
+    uint64_t seed = 0;
+    std::string report_csv;
+    bool quiet = false;
+};
+
+void add_render_command(CLI::App& app, RenderArgs& args);
+// Returns the process exit code (0 ok, 1 internal error, 2 bad input).
+int run_render(const RenderArgs& args);
+
+}  // namespace omega

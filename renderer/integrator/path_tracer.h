@@ -1,0 +1,38 @@
+#pragma once
+// Unidirectional path tracer: the strategies s <= 1 of the path integral (camera subpath, with
+// the last vertex either hit (s = 0) or connected to a light sample (s = 1)), combined with the
+// power heuristic in solid-angle measure. max_depth counts edges (Veach's k): 1 = emitters seen
+// directly, 2 = direct lighting.
+#include <cstdint>
+
+#include "sampling/rng.h"
+#include "scene/scene.h"
+
+namespace omega {
+
+struct PathTracerSettings {
+    int max_depth = -1;  // -1: unbounded, Russian roulette ends paths
+    int rr_depth = 5;    // first edge count at which Russian roulette may stop a path
+};
+
+// Per-thread counters; each worker owns one (cache-line aligned by its container).
+struct TracerStats {
+    uint64_t rays = 0;
+    uint64_t samples = 0;
+    uint64_t nonfinite = 0;
+};
+
+class PathTracer {
+public:
+    PathTracer(const Scene& scene, const PathTracerSettings& settings) : scene_(scene), settings_(settings) {}
+    // Radiance along `ray`. Called concurrently from render threads; touches only `rng` and `stats`.
+    Rgb radiance(Ray ray, Rng& rng, TracerStats& stats) const;
+
+private:
+    Rgb sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf, Rng& rng,
+                      TracerStats& stats) const;
+    const Scene& scene_;
+    PathTracerSettings settings_;
+};
+
+}  // namespace omega

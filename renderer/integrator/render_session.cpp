@@ -1,0 +1,134 @@
+#include "integrator/render_session.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+
+namespace omega {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr long long kDefaultSpp = 64;
+constexpr long long kMaxPassSpp = 256;
+constexpr double kPassSeconds = 1.0;
+constexpr long long kMinSppForErrorHalt = 16;  // variance estimates below this are too noisy to stop on
+
+PathTracerSettings tracer_settings(const IntegratorDesc& d) { return {d.max_depth, d.rr_depth}; }
+
+}  // namespace
+
+int resolve_threads(int threads) {
+    if (threads > 0) return threads;
+    return std::max(1, int(std::thread::hardware_concurrency()));
+}
+
+RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
+    : scene_(scene), settings_(settings), tracer_(scene, tracer_settings(settings.integrator)), film_(scene.desc().sensor.film) {
+    if (settings.integrator.type != IntegratorType::Path)
+        throw std::invalid_argument("integrator: only 'path' is available in this build");
+}
+
+void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats) {
+    const Sensor& sensor = scene_.sensor();
+    const uint64_t width = uint64_t(sensor.width);
+    for (int y = tile.y0; y < tile.y1; ++y) {
+        for (int x = tile.x0; x < tile.x1; ++x) {
+            uint64_t pixel = uint64_t(y) * width + uint64_t(x);
+            for (long long i = s0; i < s1; ++i) {
+                Rng rng = Rng::for_sample(settings_.seed, pixel, uint64_t(i));
+                Vec2 u_film{rng.next_1d(), rng.next_1d()};
+                Vec2 u_lens{rng.next_1d(), rng.next_1d()};
+                Vec2 pos = film_.sample_position(x, y, u_film);
+                Ray ray = sensor.generate_ray(pos, u_lens);
+                Rgb L = tracer_.radiance(ray, rng, stats);
+                ++stats.samples;
+                if (!is_finite(L)) {
+                    ++stats.nonfinite;  // discarded: one bad sample must not poison a pixel
+                    continue;
+                }
+                film_.add_sample(x, y, L);
+            }
+        }
+    }
+}
+
+PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_pass) {
+    const HaltDesc& halt = settings_.halt;
+    const bool no_halt = !halt.spp && !halt.time_s && !halt.target_error;
+    const long long spp_limit = halt.spp ? *halt.spp : (no_halt ? kDefaultSpp : -1);
+    const std::vector<Rect> tiles = film_.tiles(settings_.tile_size);
+    const long long pixels = film_.crop().area();
+
+    tbb::task_arena arena(resolve_threads(settings_.threads));
+    tbb::enumerable_thread_specific<TracerStats> stats;  // cache-aligned per thread
+    const auto t_start = Clock::now();
+    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t_start).count(); };
+
+    PassReport report;
+    report.spp = settings_.first_sample;
+    long long pass_spp = 1;
+    while (!aborted()) {
+        long long s0 = report.spp;
+        long long n = pass_spp;
+        if (spp_limit >= 0) n = std::min(n, spp_limit - s0);
+        if (halt.time_s && report.pass > 0 && report.samples_per_s > 0) {
+            // Size the pass to the time left so a time limit is overshot by little.
+            double left = *halt.time_s - elapsed();
+            long long fit = (long long)(left * report.samples_per_s / double(std::max<long long>(1, pixels)));
+            n = std::clamp(fit, 1LL, n);
+        }
+        if (n <= 0) break;
+        const long long s1 = s0 + n;
+        arena.execute([&] {
+            tbb::parallel_for(
+                tbb::blocked_range<size_t>(0, tiles.size(), 1),
+                [&](const tbb::blocked_range<size_t>& r) {
+                    TracerStats& st = stats.local();
+                    for (size_t t = r.begin(); t != r.end(); ++t) {
+                        if (aborted()) return;
+                        render_tile(tiles[t], s0, s1, st);
+                    }
+                },
+                tbb::simple_partitioner());
+        });
+        if (aborted()) break;  // a partial pass is not reported as complete
+
+        report.pass += 1;
+        report.spp = s1;
+        report.elapsed_s = elapsed();
+        TracerStats total;
+        for (const auto& s : stats) {
+            total.rays += s.rays;
+            total.samples += s.samples;
+            total.nonfinite += s.nonfinite;
+        }
+        report.rays = total.rays;
+        report.samples = total.samples;
+        report.nonfinite = total.nonfinite;
+        report.samples_per_s = report.elapsed_s > 0 ? double(total.samples) / report.elapsed_s : 0;
+        report.rays_per_s = report.elapsed_s > 0 ? double(total.rays) / report.elapsed_s : 0;
+        report.error = film_.estimate_error();
+        if (on_pass) on_pass(report);
+
+        if (spp_limit >= 0 && report.spp >= spp_limit) break;
+        if (halt.time_s && report.elapsed_s >= *halt.time_s) break;
+        if (halt.target_error && report.spp >= kMinSppForErrorHalt && report.error.mean_rel_error <= *halt.target_error)
+            break;
+        // Aim for passes of about kPassSeconds so progress, checkpoints and halts stay responsive;
+        // pass boundaries never change the image, only how often it is reported.
+        long long fit = (long long)(kPassSeconds * report.samples_per_s / double(std::max<long long>(1, pixels)));
+        pass_spp = std::clamp(fit, 1LL, std::min(kMaxPassSpp, pass_spp * 2));
+    }
+    return report;
+}
+
+}  // namespace omega

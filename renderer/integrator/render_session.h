@@ -1,0 +1,65 @@
+#pragma once
+// The render driver: progressive passes over tiles on a oneTBB arena.
+//
+// Lifecycle (Tungsten's): construct (prepare) -> run() (start; blocks) -> abort() from any thread.
+// Determinism: sample i of pixel p draws from Rng::for_sample(seed, p, i) and each pixel belongs
+// to exactly one tile, so the film is bit-identical for any thread count or tile order.
+#include <atomic>
+#include <functional>
+#include <memory>
+
+#include "film/film.h"
+#include "integrator/path_tracer.h"
+#include "scene/scene.h"
+
+namespace omega {
+
+struct RenderSettings {
+    HaltDesc halt;           // none given: 64 spp
+    int threads = 0;         // 0: all hardware threads
+    uint64_t seed = 0;
+    int tile_size = 32;
+    long long first_sample = 0;  // resume: sample indices below this are already in the film
+    IntegratorDesc integrator;
+};
+
+struct PassReport {
+    int pass = 0;
+    long long spp = 0;         // samples per pixel completed
+    double elapsed_s = 0;
+    double samples_per_s = 0;
+    double rays_per_s = 0;
+    uint64_t rays = 0, samples = 0, nonfinite = 0;
+    ErrorEstimate error;
+};
+
+class RenderSession {
+public:
+    // Throws std::invalid_argument when the integrator is not available.
+    RenderSession(const Scene& scene, const RenderSettings& settings);
+
+    // Renders until the halt condition or abort(). Calls on_pass after each pass, on the calling
+    // thread, while no worker touches the film. Returns the last report.
+    PassReport run(const std::function<void(const PassReport&)>& on_pass = {});
+    // Any thread: the current pass stops at the next tile boundary.
+    void abort() { aborted_.store(true, std::memory_order_relaxed); }
+    bool aborted() const { return aborted_.load(std::memory_order_relaxed); }
+
+    const Film& film() const { return film_; }
+    Film& film() { return film_; }
+    const RenderSettings& settings() const { return settings_; }
+
+private:
+    void render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats);
+
+    const Scene& scene_;
+    RenderSettings settings_;
+    PathTracer tracer_;
+    Film film_;
+    std::atomic<bool> aborted_{false};
+};
+
+// Number of worker threads `threads` resolves to (0 = hardware concurrency).
+int resolve_threads(int threads);
+
+}  // namespace omega

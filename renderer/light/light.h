@@ -1,0 +1,65 @@
+#pragma once
+// The closed set of emitters, dispatched through std::variant.
+// Densities: pdf_sa is per unit solid angle at the receiving point; delta lights (point, spot,
+// directional) have none and report delta = true with a discrete probability of 1.
+#include <optional>
+#include <variant>
+
+#include "math/frame.h"
+#include "math/vec.h"
+
+namespace omega {
+
+class Scene;
+struct SurfaceHit;
+
+struct AreaLight {
+    uint32_t shape = 0;
+    Rgb radiance;
+    bool two_sided = false;
+};
+struct PointLight {
+    Vec3 position;
+    Rgb intensity;  // W/sr
+};
+// Mitsuba's spot: full intensity inside beam_width, falling off linearly in angle to 0 at cutoff.
+struct SpotLight {
+    Vec3 position;
+    Frame frame;  // frame.n is the axis
+    Rgb intensity;
+    float cutoff_rad = 0, beam_rad = 0, cos_cutoff = 1;
+};
+struct DirectionalLight {
+    Vec3 direction;  // of travel, unit
+    Rgb irradiance;  // W/m^2
+};
+struct ConstantLight {
+    Rgb radiance;
+};
+
+using Light = std::variant<AreaLight, PointLight, SpotLight, DirectionalLight, ConstantLight>;
+
+// A light sample seen from a reference point, for next-event estimation.
+struct LightSample {
+    Rgb Li;            // radiance (or intensity / r^2 for point lights) arriving along -wi
+    Vec3 wi;           // unit, from the reference point towards the light
+    Vec3 p;            // point on the light (unused when infinite)
+    Vec3 p_error;      // its error bound
+    Vec3 n;            // its normal (zero for point-like lights)
+    float pdf_sa = 0;  // solid angle at the reference point (1 for delta lights)
+    bool delta = false;
+    bool infinite = false;
+};
+
+std::optional<LightSample> light_sample_li(const Scene& scene, const Light& light, const Vec3& ref_p, Vec2 u);
+// Density (solid angle at ref_p) with which light_sample_li would pick the point `hit` on an area light.
+float light_pdf_li_sa(const Scene& scene, const AreaLight& light, const Vec3& ref_p, const SurfaceHit& hit);
+// Constant environment: density of direction wi.
+inline float environment_pdf_li_sa() { return 0.07957747154594766788f; }  // 1 / 4pi, uniform sphere
+// Radiance leaving an area light at `hit` towards w.
+Rgb area_light_le(const AreaLight& light, const SurfaceHit& hit, const Vec3& w);
+// Emitted power, for choosing lights in proportion to it.
+double light_power(const Scene& scene, const Light& light);
+bool light_is_delta(const Light& light);
+
+}  // namespace omega

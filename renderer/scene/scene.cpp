@@ -1,0 +1,119 @@
+// Embree queries. Rays leaving a planar primitive carry its id; a per-query context filter
+// rejects a hit on that same primitive, which can only be a rounding artefact.
+#include "scene/scene.h"
+
+#include <cmath>
+
+#include "math/float_bits.h"
+#include "scene/sphere_geometry.h"
+
+namespace omega {
+
+namespace {
+
+struct QueryContext {
+    RTCIntersectContext ctx;  // must be first: Embree hands back a pointer to it
+    uint32_t geom, prim;
+};
+
+void reject_self_hit(const RTCFilterFunctionNArguments* args) {
+    const auto* qc = reinterpret_cast<const QueryContext*>(args->context);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] == 0) continue;
+        if (RTCHitN_geomID(args->hit, args->N, i) == qc->geom && RTCHitN_primID(args->hit, args->N, i) == qc->prim)
+            args->valid[i] = 0;
+    }
+}
+
+void init_context(QueryContext& qc, const Ray& ray) {
+    rtcInitIntersectContext(&qc.ctx);
+    qc.geom = ray.origin_geom;
+    qc.prim = ray.origin_prim;
+    if (ray.origin_geom != kNoPrimitive) qc.ctx.filter = reject_self_hit;
+}
+
+void fill_ray(RTCRay& r, const Ray& ray) {
+    r.org_x = ray.o.x; r.org_y = ray.o.y; r.org_z = ray.o.z;
+    r.dir_x = ray.d.x; r.dir_y = ray.d.y; r.dir_z = ray.d.z;
+    r.tnear = 0.f;
+    r.tfar = ray.tmax;
+    r.time = 0.f;
+    r.mask = 0xffffffffu;
+    r.id = 0;
+    r.flags = 0;
+}
+
+}  // namespace
+
+Scene::~Scene() {
+    if (rtc_) rtcReleaseScene(rtc_);
+    if (device_) rtcReleaseDevice(device_);
+}
+
+bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
+    QueryContext qc;
+    init_context(qc, ray);
+    RTCRayHit rh;
+    fill_ray(rh.ray, ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rtc_, &qc.ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+
+    const Shape& sh = shapes_[rh.hit.geomID];
+    hit.t = rh.ray.tfar;
+    hit.shape = rh.hit.geomID;
+    hit.prim = rh.hit.primID;
+    if (sh.kind == ShapeKind::Sphere) {
+        sphere_hit_point(sh.sphere.center, sh.sphere.radius, ray, hit.t, hit);
+        if (sh.flip_normals) {
+            hit.ng = -hit.ng;
+            hit.ns = -hit.ns;
+        }
+        hit.planar = false;
+    } else {
+        const auto& m = sh.mesh;
+        uint32_t i0 = m.indices[3 * hit.prim], i1 = m.indices[3 * hit.prim + 1], i2 = m.indices[3 * hit.prim + 2];
+        const Vec3 &p0 = m.positions[i0], &p1 = m.positions[i1], &p2 = m.positions[i2];
+        float b1 = std::clamp(rh.hit.u, 0.f, 1.f), b2 = std::clamp(rh.hit.v, 0.f, 1.f);
+        if (b1 + b2 > 1.f) {
+            float s = b1 + b2;
+            b1 /= s;
+            b2 /= s;
+        }
+        float b0 = 1.f - b1 - b2;
+        // Barycentric interpolation, with its bound (pbrt-v4 eq. 6.x: gamma_7 * sum |b_i p_i|).
+        hit.p = p0 * b0 + p1 * b1 + p2 * b2;
+        hit.p_error = (abs(p0 * b0) + abs(p1 * b1) + abs(p2 * b2)) * gamma_bound(7);
+        Vec3 ng = normalize(cross(p1 - p0, p2 - p0));
+        if (sh.flip_normals) ng = -ng;
+        if (!m.normals.empty()) {
+            Vec3 ns = m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2;
+            float len = length(ns);
+            if (len > 0 && std::isfinite(len)) {
+                ns = ns / len;
+                // The shading normal decides orientation; keep the geometric one on its side.
+                if (dot(ng, ns) < 0) ng = -ng;
+                hit.ns = ns;
+            } else {
+                hit.ns = ng;
+            }
+        } else {
+            hit.ns = ng;
+        }
+        hit.ng = ng;
+        hit.planar = true;
+    }
+    return true;
+}
+
+bool Scene::occluded(const Ray& ray) const {
+    QueryContext qc;
+    init_context(qc, ray);
+    RTCRay r;
+    fill_ray(r, ray);
+    rtcOccluded1(rtc_, &qc.ctx, &r);
+    return r.tfar < 0.f;
+}
+
+}  // namespace omega

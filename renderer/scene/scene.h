@@ -1,0 +1,84 @@
+#pragma once
+// The renderable scene: world-space geometry in one Embree BVH, materials, lights and the
+// sensor. Built once from a SceneDesc (scene_builder.cpp), then read-only: every method is safe
+// to call from any number of render threads at once.
+#include <embree3/rtcore.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bsdf/bsdf.h"
+#include "light/light.h"
+#include "math/vec.h"
+#include "sampling/distribution.h"
+#include "scene/ray.h"
+#include "scene/scene_desc.h"
+#include "scene/sphere_geometry.h"
+#include "scene/triangle_mesh.h"
+#include "sensor/sensor.h"
+
+namespace omega {
+
+enum class ShapeKind : uint8_t { Triangles, Sphere };
+
+struct Shape {
+    ShapeKind kind = ShapeKind::Triangles;
+    uint32_t material = 0;  // index into Scene::materials()
+    int32_t light = -1;     // its area light, or -1
+    bool flip_normals = false;
+    TriangleMesh mesh;      // world space (triangles)
+    SphereData sphere;      // world space (sphere); Embree keeps a pointer to it
+    double area = 0;                     // world-space surface area
+    DiscreteDistribution tri_by_area;    // triangles, for uniform area sampling
+    std::string name;                    // for messages: "shapes[3]"
+};
+
+struct SceneBounds {
+    Vec3 lo{kInfinity, kInfinity, kInfinity}, hi{-kInfinity, -kInfinity, -kInfinity};
+    Vec3 center() const { return (lo + hi) * 0.5f; }
+    float radius() const { return 0.5f * length(hi - lo); }
+    bool empty() const { return lo.x > hi.x; }
+};
+
+class Scene {
+public:
+    // Loads resources and builds the BVH. Throws SceneError for bad content (degenerate
+    // meshes...) and std::runtime_error for Embree failures.
+    static std::unique_ptr<Scene> build(const SceneDesc& desc);
+    ~Scene();
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    // Closest hit within (0, ray.tmax). Thread-safe.
+    bool intersect(const Ray& ray, SurfaceHit& hit) const;
+    // Any hit within (0, ray.tmax). Thread-safe.
+    bool occluded(const Ray& ray) const;
+
+    const std::vector<Shape>& shapes() const { return shapes_; }
+    const std::vector<Bsdf>& materials() const { return materials_; }
+    const std::vector<Light>& lights() const { return lights_; }
+    const DiscreteDistribution& light_selection() const { return light_select_; }
+    int environment_light() const { return env_light_; }  // index or -1
+    const Sensor& sensor() const { return sensor_; }
+    const SceneDesc& desc() const { return desc_; }
+    const SceneBounds& bounds() const { return bounds_; }
+    const Bsdf& bsdf_of(const SurfaceHit& h) const { return materials_[shapes_[h.shape].material]; }
+
+private:
+    Scene() = default;
+    void add_embree_geometry();
+
+    SceneDesc desc_;
+    RTCDevice device_ = nullptr;
+    RTCScene rtc_ = nullptr;
+    std::vector<Shape> shapes_;
+    std::vector<Bsdf> materials_;
+    std::vector<Light> lights_;
+    DiscreteDistribution light_select_;
+    int env_light_ = -1;
+    Sensor sensor_;
+    SceneBounds bounds_;
+};
+
+}  // namespace omega

@@ -1,0 +1,166 @@
+// Resource loading: SceneDesc -> Scene. Only what the scene references is loaded; materials no
+// shape uses are not built.
+#include <cmath>
+#include <stdexcept>
+#include <unordered_map>
+
+#include <fmt/format.h>
+
+#include "scene/scene.h"
+#include "scene/scene_error.h"
+
+namespace omega {
+
+namespace {
+
+std::string where(const SourceLoc& loc) { return fmt::format("{}:{}", loc.file, loc.line); }
+
+double triangle_area(const TriangleMesh& m, size_t t) {
+    Vec3d p0(m.positions[m.indices[3 * t]]), p1(m.positions[m.indices[3 * t + 1]]), p2(m.positions[m.indices[3 * t + 2]]);
+    return 0.5 * length(cross(p1 - p0, p2 - p0));
+}
+
+Light make_light(const LightDesc& d) {
+    switch (d.type) {
+        case LightType::Point: return PointLight{Vec3(d.position), d.intensity};
+        case LightType::Spot: {
+            auto tf = Transform::make(d.to_world);
+            SpotLight s;
+            s.position = Vec3(tf->point({0, 0, 0}));
+            s.frame = Frame::from_normal(Vec3(normalize(tf->vector({0, 0, 1}))));
+            s.intensity = d.intensity;
+            s.cutoff_rad = d.cutoff_angle * kPi / 180.f;
+            s.beam_rad = std::min(d.beam_width, d.cutoff_angle) * kPi / 180.f;
+            s.cos_cutoff = std::cos(s.cutoff_rad);
+            return s;
+        }
+        case LightType::Directional: return DirectionalLight{Vec3(normalize(d.direction)), d.irradiance};
+        case LightType::Constant: return ConstantLight{d.radiance};
+    }
+    throw std::logic_error("unknown light type");
+}
+
+}  // namespace
+
+std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
+    std::unique_ptr<Scene> s(new Scene());
+    s->desc_ = desc;
+    s->sensor_ = Sensor::from_desc(desc.sensor);
+
+    // Materials are built only if some shape references them.
+    std::unordered_map<std::string, uint32_t> material_index;
+    auto material_for = [&](const ShapeDesc& sd, size_t i) -> uint32_t {
+        auto it = material_index.find(sd.material);
+        if (it != material_index.end()) return it->second;
+        auto m = desc.materials.find(sd.material);
+        if (m == desc.materials.end())
+            throw SceneError(fmt::format("{}: shapes[{}].material: unknown material '{}'", where(sd.loc), i, sd.material));
+        uint32_t idx = uint32_t(s->materials_.size());
+        s->materials_.push_back(m->second.bsdf);
+        material_index.emplace(sd.material, idx);
+        return idx;
+    };
+
+    s->shapes_.reserve(desc.shapes.size());
+    for (size_t i = 0; i < desc.shapes.size(); ++i) {
+        const ShapeDesc& sd = desc.shapes[i];
+        Shape sh;
+        sh.name = fmt::format("shapes[{}]", i);
+        sh.material = material_for(sd, i);
+        sh.flip_normals = sd.flip_normals;
+        if (sd.type == ShapeType::Sphere) {
+            sh.kind = ShapeKind::Sphere;
+            // A sphere's to_world may translate and scale uniformly; anything else is rejected.
+            Vec3d c = sd.to_world.point(sd.center);
+            Vec3d ax = sd.to_world.vector({sd.radius, 0, 0}), ay = sd.to_world.vector({0, sd.radius, 0}),
+                  az = sd.to_world.vector({0, 0, sd.radius});
+            double r = length(ax);
+            if (std::abs(length(ay) - r) > 1e-6 * r || std::abs(length(az) - r) > 1e-6 * r)
+                throw SceneError(fmt::format("{}: {}.to_world: a sphere needs a uniform scale", where(sd.loc), sh.name));
+            if (!(r > 0) || !std::isfinite(r))
+                throw SceneError(fmt::format("{}: {}.radius: must be positive and finite", where(sd.loc), sh.name));
+            sh.sphere = {c, r};
+            sh.area = 4.0 * kPiD * r * r;
+        } else {
+            sh.kind = ShapeKind::Triangles;
+            switch (sd.type) {
+                case ShapeType::Mesh: sh.mesh = load_mesh_file(sd.file, sd.loc); break;
+                case ShapeType::Rectangle: sh.mesh = make_rectangle(); break;
+                case ShapeType::Cube: sh.mesh = make_cube(); break;
+                case ShapeType::Disk: sh.mesh = make_disk(); break;
+                case ShapeType::Sphere: break;
+            }
+            if (sd.face_normals) sh.mesh.normals.clear();
+            auto tf = Transform::make(sd.to_world);
+            if (!tf) throw SceneError(fmt::format("{}: {}.to_world: matrix is singular", where(sd.loc), sh.name));
+            bake_mesh(sh.mesh, *tf, sd.flip_normals, sd.drop_degenerate, sd.loc, sh.name);
+            std::vector<double> areas(sh.mesh.triangle_count());
+            for (size_t t = 0; t < areas.size(); ++t) areas[t] = triangle_area(sh.mesh, t);
+            sh.tri_by_area = DiscreteDistribution(areas);
+            sh.area = sh.tri_by_area.total();
+            if (sh.mesh.triangle_count() == 0)
+                throw SceneError(fmt::format("{}: {}: the shape has no triangles", where(sd.loc), sh.name));
+        }
+        if (sd.emitter && !is_black(sd.emitter->radiance)) {
+            sh.light = int32_t(s->lights_.size());
+            s->lights_.push_back(AreaLight{uint32_t(i), sd.emitter->radiance, sd.emitter->two_sided});
+        }
+        s->shapes_.push_back(std::move(sh));
+    }
+    for (const LightDesc& ld : desc.lights) {
+        Light l = make_light(ld);
+        // A light that emits nothing cannot contribute: leave it out.
+        if (std::holds_alternative<ConstantLight>(l)) {
+            if (is_black(std::get<ConstantLight>(l).radiance)) continue;
+            if (s->env_light_ >= 0)
+                throw SceneError(fmt::format("{}: lights: only one constant environment is allowed", where(ld.loc)));
+            s->env_light_ = int(s->lights_.size());
+        }
+        s->lights_.push_back(l);
+    }
+
+    s->add_embree_geometry();
+
+    std::vector<double> power;
+    for (const Light& l : s->lights_) power.push_back(light_power(*s, l));
+    s->light_select_ = DiscreteDistribution(power);
+    return s;
+}
+
+void Scene::add_embree_geometry() {
+    device_ = rtcNewDevice(nullptr);
+    if (!device_) throw std::runtime_error("embree: cannot create a device");
+    rtc_ = rtcNewScene(device_);
+    rtcSetSceneFlags(rtc_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+    rtcSetSceneBuildQuality(rtc_, RTC_BUILD_QUALITY_HIGH);
+    for (size_t i = 0; i < shapes_.size(); ++i) {
+        Shape& sh = shapes_[i];
+        if (sh.kind == ShapeKind::Sphere) {
+            attach_sphere(device_, rtc_, unsigned(i), &sh.sphere);
+            Vec3 c(sh.sphere.center);
+            float r = float(sh.sphere.radius);
+            bounds_.lo = vmin(bounds_.lo, c - Vec3(r));
+            bounds_.hi = vmax(bounds_.hi, c + Vec3(r));
+            continue;
+        }
+        RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                              3 * sizeof(float), sh.mesh.positions.size()));
+        for (size_t k = 0; k < sh.mesh.positions.size(); ++k) {
+            const Vec3& p = sh.mesh.positions[k];
+            v[3 * k] = p.x; v[3 * k + 1] = p.y; v[3 * k + 2] = p.z;
+            bounds_.lo = vmin(bounds_.lo, p);
+            bounds_.hi = vmax(bounds_.hi, p);
+        }
+        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), sh.mesh.triangle_count()));
+        std::copy(sh.mesh.indices.begin(), sh.mesh.indices.end(), idx);
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(rtc_, g, unsigned(i));
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(rtc_);
+    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) throw std::runtime_error("embree: scene build failed");
+}
+
+}  // namespace omega

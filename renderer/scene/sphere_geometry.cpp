@@ -1,0 +1,98 @@
+#include "scene/sphere_geometry.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "math/float_bits.h"
+
+namespace omega {
+
+namespace {
+
+// Both roots of |o + t d - c|^2 = r^2 in double, the stable form (no cancellation).
+bool sphere_roots(const SphereData& s, const Vec3d& o, const Vec3d& d, double& t0, double& t1) {
+    Vec3d oc = o - s.center;
+    double a = dot(d, d);
+    double b = 2.0 * dot(oc, d);
+    // |oc|^2 - r^2 as (|oc| - r)(|oc| + r) keeps precision when the origin is on the sphere.
+    double loc = length(oc);
+    double c = (loc - s.radius) * (loc + s.radius);
+    double disc = b * b - 4.0 * a * c;
+    if (disc < 0) return false;
+    double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+    if (q == 0) {
+        t0 = t1 = 0;
+        return a != 0;
+    }
+    t0 = q / a;
+    t1 = c / q;
+    if (t0 > t1) std::swap(t0, t1);
+    return true;
+}
+
+void sphere_bounds(const RTCBoundsFunctionArguments* args) {
+    const auto* s = static_cast<const SphereData*>(args->geometryUserPtr);
+    RTCBounds* b = args->bounds_o;
+    // Pad by a few ulps so float rounding of the box never clips the sphere.
+    auto lo = [](double v) { return next_float_down(next_float_down(float(v))); };
+    auto hi = [](double v) { return next_float_up(next_float_up(float(v))); };
+    b->lower_x = lo(s->center.x - s->radius); b->upper_x = hi(s->center.x + s->radius);
+    b->lower_y = lo(s->center.y - s->radius); b->upper_y = hi(s->center.y + s->radius);
+    b->lower_z = lo(s->center.z - s->radius); b->upper_z = hi(s->center.z + s->radius);
+}
+
+void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
+    if (!args->valid[0]) return;
+    const auto* s = static_cast<const SphereData*>(args->geometryUserPtr);
+    auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1: we only issue single rays
+    RTCRay& r = rh->ray;
+    Vec3d o{r.org_x, r.org_y, r.org_z}, d{r.dir_x, r.dir_y, r.dir_z};
+    double t0, t1;
+    if (!sphere_roots(*s, o, d, t0, t1)) return;
+    double t = t0 > r.tnear ? t0 : t1;
+    if (!(t > r.tnear) || !(t < r.tfar)) return;
+    Vec3d n = o + d * t - s->center;
+    r.tfar = float(t);
+    rh->hit.Ng_x = float(n.x); rh->hit.Ng_y = float(n.y); rh->hit.Ng_z = float(n.z);
+    rh->hit.u = 0; rh->hit.v = 0;
+    rh->hit.primID = args->primID;
+    rh->hit.geomID = args->geomID;
+    rh->hit.instID[0] = args->context->instID[0];
+}
+
+void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
+    if (!args->valid[0]) return;
+    const auto* s = static_cast<const SphereData*>(args->geometryUserPtr);
+    auto* r = reinterpret_cast<RTCRay*>(args->ray);
+    Vec3d o{r->org_x, r->org_y, r->org_z}, d{r->dir_x, r->dir_y, r->dir_z};
+    double t0, t1;
+    if (!sphere_roots(*s, o, d, t0, t1)) return;
+    if ((t0 > r->tnear && t0 < r->tfar) || (t1 > r->tnear && t1 < r->tfar)) r->tfar = -kInfinity;
+}
+
+}  // namespace
+
+void attach_sphere(RTCDevice device, RTCScene scene, unsigned geom_id, const SphereData* data) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, 1);
+    rtcSetGeometryUserData(g, const_cast<SphereData*>(data));
+    rtcSetGeometryBoundsFunction(g, sphere_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(g, sphere_intersect);
+    rtcSetGeometryOccludedFunction(g, sphere_occluded);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(scene, g, geom_id);
+    rtcReleaseGeometry(g);
+}
+
+void sphere_hit_point(const Vec3d& center, double radius, const Ray& ray, float t, SurfaceHit& hit) {
+    Vec3d p = Vec3d(ray.o) + Vec3d(ray.d) * double(t);
+    Vec3d n = normalize(p - center);
+    p = center + n * radius;  // re-projection removes the error of o + t d
+    hit.p = Vec3(p);
+    // Rounding p (double) to float plus the re-projection's own error (pbrt-v4: gamma_5 |p|).
+    hit.p_error = abs(hit.p) * gamma_bound(5);
+    hit.ng = Vec3(n);
+    hit.ns = hit.ng;
+}
+
+}  // namespace omega
