@@ -64,6 +64,8 @@ public:
     const SceneDesc& desc() const { return desc_; }
     const SceneBounds& bounds() const { return bounds_; }
     const Bsdf& bsdf_of(const SurfaceHit& h) const { return materials_[shapes_[h.shape].material]; }
+    // The raw BVH, for benchmarks that measure Embree's own rate on the same scene.
+    RTCScene embree_scene() const { return rtc_; }
 
 private:
     Scene() = default;

@@ -1,0 +1,92 @@
+// A diffuse plane lit by a parallel rectangular area light: the outgoing radiance is
+// rho * Le * F(x), with F the analytic point-to-rectangle form factor. Direct light only.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render_harness.h"
+
+namespace omega {
+namespace {
+
+// Form factor from a point to the rectangle [0,a] x [0,b] on a parallel plane at height h,
+// with the point under the corner (0,0). Odd in a and b, so rectangles anywhere follow by
+// inclusion-exclusion.
+double corner_ff(double a, double b, double h) {
+    double A = a / h, B = b / h;
+    double sa = std::sqrt(1 + A * A), sb = std::sqrt(1 + B * B);
+    return (A / sa * std::atan(B / sa) + B / sb * std::atan(A / sb)) / (2 * kPiD);
+}
+
+double rect_ff(double px, double py, double x0, double x1, double y0, double y1, double h) {
+    x0 -= px; x1 -= px; y0 -= py; y1 -= py;
+    return corner_ff(x1, y1, h) - corner_ff(x0, y1, h) - corner_ff(x1, y0, h) + corner_ff(x0, y0, h);
+}
+
+struct Setup {
+    double lx0 = 0.5, lx1 = 1.5, ly0 = -0.5, ly1 = 0.5, h = 1.0;  // the light
+    double cx = -0.5, cy = 0.0, half = 0.75;                       // the viewed square
+    float rho = 0.8f, le = 4.f;
+    int res = 24;
+};
+
+SceneDesc make_scene(const Setup& s, FilterType filter) {
+    SceneDesc d = test::empty_scene(s.res, s.res);
+    d.integrator.max_depth = 2;
+    d.sensor.type = SensorType::Orthographic;
+    d.sensor.film.filter = filter;
+    d.sensor.to_world = Mat4::look_at({s.cx, s.cy, 5}, {s.cx, s.cy, 0}, {0, 1, 0}) * Mat4::scale({s.half, s.half, 1});
+    d.materials["floor"] = test::diffuse("floor", Rgb(s.rho));
+    d.materials["black"] = MaterialDesc{"black", BlackBsdf{}, {}};
+    ShapeDesc floor;
+    floor.type = ShapeType::Rectangle;
+    floor.to_world = Mat4::scale({10, 10, 1});
+    floor.material = "floor";
+    d.shapes.push_back(floor);
+    ShapeDesc light;
+    light.type = ShapeType::Rectangle;
+    // Rectangle [-1,1]^2 facing +z -> flipped to face down, sized and placed over the light area.
+    light.to_world = Mat4::translate({0.5 * (s.lx0 + s.lx1), 0.5 * (s.ly0 + s.ly1), s.h}) *
+                     Mat4::scale({0.5 * (s.lx1 - s.lx0), 0.5 * (s.ly1 - s.ly0), 1}) * Mat4::rotate({1, 0, 0}, 180);
+    light.material = "black";
+    light.emitter = EmitterDesc{Rgb(s.le), false};
+    d.shapes.push_back(light);
+    return d;
+}
+
+// Expected pixel value: the box-filtered radiance, integrated over the pixel by Gauss-Legendre.
+double expected_pixel(const Setup& s, int x, int y) {
+    static const double g[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
+    static const double w[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
+    double sum = 0;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+            double fx = x + 0.5 + 0.5 * g[i], fy = y + 0.5 + 0.5 * g[j];
+            // Camera looks down with +y up: image right is world +x, image top is world +y.
+            double wx = s.cx + (2 * fx / s.res - 1) * s.half;
+            double wy = s.cy + (1 - 2 * fy / s.res) * s.half;
+            sum += w[i] * w[j] * 0.25 * s.rho * s.le * rect_ff(wx, wy, s.lx0, s.lx1, s.ly0, s.ly1, s.h);
+        }
+    return sum;
+}
+
+TEST(FormFactor, PlaneUnderRectangularLight) {
+    Setup s;
+    auto r = test::render(make_scene(s, FilterType::Box), 64, 7);
+    auto z = test::z_against(r.film(), [&](int x, int y) { return expected_pixel(s, x, y); });
+    double bound = test::z_threshold(1);
+    EXPECT_LT(std::abs(z.z), bound) << "aggregate z " << z.z;
+    // Per pixel, with a Bonferroni bound over all pixels: catches a wrong falloff shape.
+    EXPECT_LT(z.max_abs_z, test::z_threshold(s.res * s.res)) << "worst pixel z";
+    EXPECT_EQ(r.report.nonfinite, 0u);
+}
+
+TEST(FormFactor, DetectsAWrongAnswer) {
+    Setup s;
+    auto r = test::render(make_scene(s, FilterType::Box), 64, 8);
+    auto z = test::z_against(r.film(), [&](int x, int y) { return 1.03 * expected_pixel(s, x, y); });
+    EXPECT_GT(std::abs(z.z), test::z_threshold(1));
+}
+
+}  // namespace
+}  // namespace omega

@@ -1,0 +1,99 @@
+#include "render_harness.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace omega::test {
+
+RenderResult render(const SceneDesc& desc, long long spp, uint64_t seed, int threads, int tile_size) {
+    RenderResult r;
+    r.scene = Scene::build(desc);
+    RenderSettings rs;
+    rs.halt.spp = spp;
+    rs.seed = seed;
+    rs.threads = threads;
+    rs.tile_size = tile_size;
+    rs.integrator = desc.integrator;
+    r.session = std::make_unique<RenderSession>(*r.scene, rs);
+    r.report = r.session->run();
+    return r;
+}
+
+SceneDesc empty_scene(int w, int h) {
+    SceneDesc d;
+    d.path = "<test>";
+    d.sensor.film.width = w;
+    d.sensor.film.height = h;
+    d.sensor.fov = 60;
+    return d;
+}
+
+MaterialDesc diffuse(const std::string& name, Rgb reflectance) {
+    MaterialDesc m;
+    m.name = name;
+    m.bsdf = DiffuseBsdf{reflectance, true};
+    return m;
+}
+
+ZStats z_against(const Film& film, const std::function<double(int, int)>& expected) {
+    Rect c = film.crop();
+    double diff = 0, var = 0;
+    double max_abs = 0;
+    for (int y = c.y0; y < c.y1; ++y)
+        for (int x = c.x0; x < c.x1; ++x) {
+            PixelStats p = film.pixel(x, y);
+            double m = (p.mean.x + p.mean.y + p.mean.z) / 3.0;
+            // Channels of one sample are correlated: bound the variance of their average by
+            // the average of their standard errors, squared (Cauchy-Schwarz).
+            double sd = (std::sqrt(p.var_of_mean.x) + std::sqrt(p.var_of_mean.y) + std::sqrt(p.var_of_mean.z)) / 3.0;
+            double e = expected(x, y);
+            diff += m - e;
+            var += sd * sd;
+            if (sd > 0) max_abs = std::max(max_abs, std::abs(m - e) / sd);
+        }
+    ZStats z;
+    z.z = var > 0 ? diff / std::sqrt(var) : (diff == 0 ? 0 : INFINITY);
+    z.max_abs_z = max_abs;
+    z.blocks = int(c.area());
+    return z;
+}
+
+ZStats z_between(const Film& a, const Film& b, int block) {
+    Rect c = a.crop();
+    ZStats z;
+    double tdiff = 0, tvar = 0;
+    for (int by = c.y0; by < c.y1; by += block)
+        for (int bx = c.x0; bx < c.x1; bx += block) {
+            double diff = 0, var = 0;
+            for (int y = by; y < std::min(by + block, c.y1); ++y)
+                for (int x = bx; x < std::min(bx + block, c.x1); ++x) {
+                    PixelStats pa = a.pixel(x, y), pb = b.pixel(x, y);
+                    diff += (pa.mean.x + pa.mean.y + pa.mean.z) / 3.0 - (pb.mean.x + pb.mean.y + pb.mean.z) / 3.0;
+                    auto sd = [](const PixelStats& p) {
+                        return (std::sqrt(p.var_of_mean.x) + std::sqrt(p.var_of_mean.y) + std::sqrt(p.var_of_mean.z)) / 3.0;
+                    };
+                    var += sd(pa) * sd(pa) + sd(pb) * sd(pb);
+                }
+            tdiff += diff;
+            tvar += var;
+            if (var > 0) z.max_abs_z = std::max(z.max_abs_z, std::abs(diff) / std::sqrt(var));
+            else if (diff != 0) z.max_abs_z = INFINITY;
+            ++z.blocks;
+        }
+    z.z = tvar > 0 ? tdiff / std::sqrt(tvar) : 0;
+    return z;
+}
+
+double z_threshold(int n, double alpha) {
+    // Inverse of the two-sided normal tail by bisection on erfc.
+    double p = alpha / std::max(1, n);
+    double lo = 0, hi = 40;
+    for (int i = 0; i < 200; ++i) {
+        double mid = 0.5 * (lo + hi);
+        if (std::erfc(mid / std::sqrt(2.0)) > p) lo = mid;
+        else hi = mid;
+    }
+    return hi;
+}
+
+}  // namespace omega::test

@@ -1,0 +1,43 @@
+#pragma once
+// Shared by integration tests: build scenes in code, render them, and compare results
+// statistically (z-tests against the estimated standard error, never fixed tolerances).
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "film/film.h"
+#include "integrator/render_session.h"
+#include "scene/scene.h"
+#include "scene/scene_desc.h"
+
+namespace omega::test {
+
+struct RenderResult {
+    std::unique_ptr<Scene> scene;
+    std::unique_ptr<RenderSession> session;
+    PassReport report;
+    const Film& film() const { return session->film(); }
+};
+
+RenderResult render(const SceneDesc& desc, long long spp, uint64_t seed = 0, int threads = 0, int tile_size = 32);
+
+// A minimal valid scene: a perspective camera at the origin looking along +z, film w x h, box filter.
+SceneDesc empty_scene(int w, int h);
+MaterialDesc diffuse(const std::string& name, Rgb reflectance);
+
+struct ZStats {
+    double z = 0;        // aggregate z of the mean difference
+    double max_abs_z = 0;  // largest per-block |z|
+    int blocks = 0;
+};
+
+// Mean over the crop of channel-averaged pixel means minus `expected(x, y)` (the expected
+// channel-averaged pixel value), as one z-score using the films' variance estimates.
+ZStats z_against(const Film& film, const std::function<double(int, int)>& expected);
+// Independent renders a and b: per-block z-scores (block x block pixels) of the difference.
+ZStats z_between(const Film& a, const Film& b, int block);
+
+// |z| bound with family-wise false-alarm rate alpha over n tests (Bonferroni, two-sided).
+double z_threshold(int n, double alpha = 1e-3);
+
+}  // namespace omega::test
