@@ -56,7 +56,8 @@ public:
     int width() const;   // full film
     int height() const;
     Rect crop() const;   // region actually rendered (the whole film without a crop)
-    // Tiles covering crop(), in a fixed order.
+    // Tiles covering crop() exactly once, row-major (top row first, left to right); edge tiles
+    // are clipped to the crop. Throws std::invalid_argument for tile_size <= 0.
     std::vector<Rect> tiles(int tile_size) const;
 
     // Continuous film position (pixels, origin top-left) of a sample for pixel (x, y),
@@ -64,7 +65,8 @@ public:
     Vec2 sample_position(int x, int y, Vec2 u) const;
 
     // (x, y) is the pixel the sample was drawn for (full-film coordinates, inside crop()), not
-    // where sample_position() put it. The caller drops non-finite values (and counts them).
+    // where sample_position() put it; outside the crop throws std::out_of_range (as does
+    // pixel()). The caller drops non-finite values (and counts them): one would poison the pixel.
     void add_sample(int x, int y, const Rgb& value);
     PixelStats pixel(int x, int y) const;
     // Pixels with fewer than 2 samples have no variance estimate; while any exists in the crop,

@@ -9,7 +9,9 @@
 
 namespace omega {
 
-// Radius used when a scene names a filter without one.
+// Radius used when a scene names a filter without one. Filter(const FilmDesc&) takes
+// desc.filter_radius as given (FilmDesc's default 0.5 suits only the box), so whoever fills a
+// FilmDesc for a tent or Gaussian must substitute this.
 float default_filter_radius(FilterType type);
 
 class Filter {
