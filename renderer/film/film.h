@@ -6,13 +6,20 @@
 // then a plain sample mean, and its variance-of-the-mean estimate is valid.
 //
 // Concurrency: add_sample() on pixel p may be called by one thread at a time; the renderer
-// guarantees it by giving each tile to one worker. Reads (pixel(), write) happen between passes.
+// guarantees it by giving each tile to one worker. Different pixels may be written concurrently
+// from different threads: each pixel's accumulator has a cache line of its own, so workers on
+// neighbouring tiles do not false-share. sample_position(), tiles() and the size queries read
+// no pixel data and are safe from any thread at any time. Everything that reads or resets pixels
+// (pixel(), estimate_error(), merge(), serialize(), clear(), write_exr, encode_exr_tile) must not
+// overlap any add_sample(): call them between passes.
 #include <array>
 #include <map>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "film/filter.h"
 #include "math/vec.h"
 #include "scene/scene_desc.h"
 
@@ -39,30 +46,56 @@ struct ErrorEstimate {
 
 class Film {
 public:
+    // Throws std::invalid_argument for a non-positive size, an empty or out-of-bounds crop, or
+    // bad filter parameters.
     explicit Film(const FilmDesc& desc);
+
+    const FilmDesc& desc() const { return desc_; }
+    const Filter& filter() const { return filter_; }
 
     int width() const;   // full film
     int height() const;
     Rect crop() const;   // region actually rendered (the whole film without a crop)
-    // Tiles covering crop(), in a fixed order.
+    // Tiles covering crop() exactly once, row-major (top row first, left to right); edge tiles
+    // are clipped to the crop. Throws std::invalid_argument for tile_size <= 0.
     std::vector<Rect> tiles(int tile_size) const;
 
     // Continuous film position (pixels, origin top-left) of a sample for pixel (x, y),
     // drawn from the filter centred on the pixel centre.
     Vec2 sample_position(int x, int y, Vec2 u) const;
 
+    // (x, y) is the pixel the sample was drawn for (full-film coordinates, inside crop()), not
+    // where sample_position() put it; outside the crop throws std::out_of_range (as does
+    // pixel()). The caller drops non-finite values (and counts them): one would poison the pixel.
     void add_sample(int x, int y, const Rgb& value);
     PixelStats pixel(int x, int y) const;
+    // Pixels with fewer than 2 samples have no variance estimate; while any exists in the crop,
+    // mean_rel_error and image_mean_stderr are +inf so that a target-error halt cannot fire.
     ErrorEstimate estimate_error(double eps = 1e-2) const;
     void clear();
 
+    // Adds other's samples to this film, as if they had been added here (Chan et al.'s pairwise
+    // update of mean and M2). Throws std::invalid_argument unless size and crop are equal.
+    void merge(const Film& other);
+
+    // Compact little-endian snapshot of the statistics (not the filter), for checkpoints.
+    std::vector<uint8_t> serialize() const;
+    // Throws std::runtime_error if the bytes are corrupt or truncated, or were written for a
+    // film of another size or crop than desc's.
+    static Film deserialize(const FilmDesc& desc, std::span<const uint8_t> bytes);
+
 private:
-    struct Accum {
+    // One cache line per pixel: workers on adjacent tiles never write the same line.
+    struct alignas(64) Accum {
         double mean[3];
         double m2[3];
         uint64_t n;
     };
+    static_assert(sizeof(Accum) == 64);
+    size_t index(int x, int y) const;
+
     FilmDesc desc_;
+    Filter filter_;
     Rect crop_;
     std::vector<Accum> px_;  // crop-sized, row-major
 };
@@ -80,15 +113,30 @@ struct ExrMeta {
 
 // Writes R,G,B and var.R,var.G,var.B (float32). The data window is the crop, the display window
 // the full film. Throws std::runtime_error on I/O failure (message names the path).
+// ZIP-compressed. Written to PATH.tmp, flushed to disk and renamed over PATH, so a reader sees
+// the old file or the new one, never a partial one.
 void write_exr(const std::string& path, const Film& film, const ExrMeta& meta);
 
 // Reads an RGB EXR (any channels R,G,B; var.* if present) for tests and comparisons.
 struct ExrImage {
     int width = 0, height = 0;  // data window size
+    int x0 = 0, y0 = 0;         // data window origin (within the display window)
+    int display_width = 0, display_height = 0;
     std::vector<float> rgb;     // 3 per pixel
     std::vector<float> var;     // 3 per pixel, empty if absent
-    std::map<std::string, std::string> attributes;  // omega.* attributes rendered as text
+    // Every string, int, float and double attribute (omega.* and standard ones) as text;
+    // floating-point values in shortest round-trip form.
+    std::map<std::string, std::string> attributes;
 };
-ExrImage read_exr(const std::string& path);
+// Throws std::runtime_error naming the path on failure, a missing R/G/B channel, or a data
+// window larger than max_pixels.
+ExrImage read_exr(const std::string& path, long long max_pixels = 1LL << 26);
+
+// In-memory EXR of one rectangle of the film (inside crop()), same channels and attributes as
+// write_exr; the data window is rect, the display window the full film. For progressive tiles.
+std::vector<uint8_t> encode_exr_tile(const Film& film, const Rect& rect, const ExrMeta& meta);
+// Decodes bytes from the network or a cache: anything malformed or truncated, or a data window
+// over max_pixels, throws std::runtime_error.
+ExrImage decode_exr_memory(std::span<const uint8_t> bytes, long long max_pixels = 1LL << 24);
 
 }  // namespace omega

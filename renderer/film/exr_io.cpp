@@ -1,0 +1,272 @@
+// OpenEXR output and input. Everything goes through memory streams so the file writer can fsync
+// and rename (OpenEXR's own file streams cannot), and tiles can travel over the network.
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <Iex.h>
+#include <ImfChannelList.h>
+#include <ImfCheckFile.h>
+#include <ImfDoubleAttribute.h>
+#include <ImfFloatAttribute.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfIntAttribute.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <climits>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "film/film.h"
+
+namespace omega {
+
+namespace {
+
+class MemOStream final : public Imf::OStream {
+public:
+    MemOStream() : Imf::OStream("<memory>") {}
+    void write(const char c[], int n) override {
+        // OpenEXR seeks back to fill in the offset table, so writes may land before the end.
+        if (pos_ + size_t(n) > buf_.size()) buf_.resize(pos_ + size_t(n));
+        std::memcpy(buf_.data() + pos_, c, size_t(n));
+        pos_ += size_t(n);
+    }
+    uint64_t tellp() override { return pos_; }
+    void seekp(uint64_t pos) override { pos_ = pos; }
+    std::vector<uint8_t> take() { return std::move(buf_); }
+
+private:
+    std::vector<uint8_t> buf_;
+    size_t pos_ = 0;
+};
+
+class MemIStream final : public Imf::IStream {
+public:
+    explicit MemIStream(std::span<const uint8_t> b) : Imf::IStream("<memory>"), b_(b) {}
+    bool read(char c[], int n) override {
+        // Bounds are checked without forming pos_ + n, which a hostile seek could overflow.
+        if (n < 0 || pos_ > b_.size() || uint64_t(n) > b_.size() - pos_)
+            throw Iex::InputExc("unexpected end of EXR data");
+        std::memcpy(c, b_.data() + pos_, size_t(n));
+        pos_ += uint64_t(n);
+        return pos_ < b_.size();
+    }
+    uint64_t tellg() override { return pos_; }
+    void seekg(uint64_t pos) override { pos_ = pos; }
+    void clear() override {}
+
+private:
+    std::span<const uint8_t> b_;
+    uint64_t pos_ = 0;
+};
+
+const char* const kRgb[3] = {"R", "G", "B"};
+const char* const kVar[3] = {"var.R", "var.G", "var.B"};
+
+std::vector<uint8_t> encode(const Film& film, const Rect& rect, const ExrMeta& meta) {
+    const Rect c = film.crop();
+    if (rect.x0 < c.x0 || rect.y0 < c.y0 || rect.x1 > c.x1 || rect.y1 > c.y1 || rect.width() <= 0 ||
+        rect.height() <= 0)
+        throw std::invalid_argument("EXR rect is empty or outside the film crop");
+
+    const Imath::Box2i display({0, 0}, {film.width() - 1, film.height() - 1});
+    const Imath::Box2i data({rect.x0, rect.y0}, {rect.x1 - 1, rect.y1 - 1});
+    Imf::Header header(display, data, 1.f, Imath::V2f(0, 0), 1.f, Imf::INCREASING_Y, Imf::ZIP_COMPRESSION);
+    for (int k = 0; k < 3; ++k) {
+        header.channels().insert(kRgb[k], Imf::Channel(Imf::FLOAT));
+        header.channels().insert(kVar[k], Imf::Channel(Imf::FLOAT));
+    }
+    // The EXR int is 32-bit; a render never gets near 2^31 spp, so clamping only guards nonsense.
+    header.insert("omega.spp", Imf::IntAttribute(int(std::clamp<long long>(meta.spp, INT_MIN, INT_MAX))));
+    header.insert("omega.time_s", Imf::DoubleAttribute(meta.time_s));
+    header.insert("omega.integrator", Imf::StringAttribute(meta.integrator));
+    // 64-bit values as decimal strings: EXR has no 64-bit integer attribute.
+    header.insert("omega.seed", Imf::StringAttribute(std::to_string(meta.seed)));
+    header.insert("omega.nonfinite", Imf::StringAttribute(std::to_string(meta.nonfinite)));
+    std::string warnings;
+    for (size_t i = 0; i < meta.warnings.size(); ++i) warnings += (i ? "\n" : "") + meta.warnings[i];
+    header.insert("omega.warnings", Imf::StringAttribute(warnings));
+    header.insert("omega.rel_error", Imf::DoubleAttribute(meta.rel_error));
+
+    const size_t w = size_t(rect.width()), h = size_t(rect.height()), area = w * h;
+    std::vector<float> planes(6 * area);  // R G B var.R var.G var.B, one plane each
+    for (int y = rect.y0; y < rect.y1; ++y)
+        for (int x = rect.x0; x < rect.x1; ++x) {
+            const PixelStats s = film.pixel(x, y);
+            const size_t i = size_t(y - rect.y0) * w + size_t(x - rect.x0);
+            for (int k = 0; k < 3; ++k) {
+                planes[size_t(k) * area + i] = float(s.mean[k]);
+                planes[size_t(3 + k) * area + i] = float(s.var_of_mean[k]);
+            }
+        }
+    Imf::FrameBuffer fb;
+    for (int k = 0; k < 3; ++k) {
+        fb.insert(kRgb[k], Imf::Slice::Make(Imf::FLOAT, &planes[size_t(k) * area], data, sizeof(float),
+                                            sizeof(float) * w));
+        fb.insert(kVar[k], Imf::Slice::Make(Imf::FLOAT, &planes[size_t(3 + k) * area], data, sizeof(float),
+                                            sizeof(float) * w));
+    }
+    MemOStream os;
+    {
+        // The destructor writes the final line-offset table, so it must run before take().
+        Imf::OutputFile out(os, header);
+        out.setFrameBuffer(fb);
+        out.writePixels(int(h));
+    }
+    return os.take();
+}
+
+std::string number_text(double v) {
+    char buf[64];
+    auto r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
+}
+std::string number_text(float v) {
+    char buf[64];
+    auto r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
+}
+
+ExrImage read_image(Imf::InputFile& file, long long max_pixels) {
+    const Imf::Header& header = file.header();
+    // A truncated file would otherwise read as zeros (or throw mid-way for some compressions).
+    if (!file.isComplete()) throw std::runtime_error("file is incomplete");
+    const Imath::Box2i dw = header.dataWindow(), disp = header.displayWindow();
+    const long long w = (long long)dw.max.x - dw.min.x + 1, h = (long long)dw.max.y - dw.min.y + 1;
+    if (w <= 0 || h <= 0) throw std::runtime_error("empty data window");
+    if (w > max_pixels / h)
+        throw std::runtime_error("data window " + std::to_string(w) + "x" + std::to_string(h) + " exceeds " +
+                                 std::to_string(max_pixels) + " pixels");
+    ExrImage img;
+    img.width = int(w);
+    img.height = int(h);
+    img.x0 = dw.min.x;
+    img.y0 = dw.min.y;
+    img.display_width = int(std::clamp<long long>((long long)disp.max.x - disp.min.x + 1, 0, INT_MAX));
+    img.display_height = int(std::clamp<long long>((long long)disp.max.y - disp.min.y + 1, 0, INT_MAX));
+
+    const Imf::ChannelList& ch = header.channels();
+    auto usable = [&](const char* name) {
+        const Imf::Channel* c = ch.findChannel(name);
+        if (c && (c->xSampling != 1 || c->ySampling != 1))
+            throw std::runtime_error(std::string("channel ") + name + " is subsampled");
+        return c != nullptr;
+    };
+    for (const char* n : kRgb)
+        if (!usable(n)) throw std::runtime_error(std::string("no channel ") + n);
+    const bool has_var = usable(kVar[0]) && usable(kVar[1]) && usable(kVar[2]);
+
+    const size_t area = size_t(w) * size_t(h);
+    img.rgb.resize(3 * area);
+    if (has_var) img.var.resize(3 * area);
+    Imf::FrameBuffer fb;
+    const size_t xs = 3 * sizeof(float), ys = xs * size_t(w);
+    for (int k = 0; k < 3; ++k) {
+        fb.insert(kRgb[k], Imf::Slice::Make(Imf::FLOAT, &img.rgb[size_t(k)], dw, xs, ys));
+        if (has_var) fb.insert(kVar[k], Imf::Slice::Make(Imf::FLOAT, &img.var[size_t(k)], dw, xs, ys));
+    }
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+
+    for (auto it = header.begin(); it != header.end(); ++it) {
+        const Imf::Attribute& a = it.attribute();
+        if (auto* s = dynamic_cast<const Imf::StringAttribute*>(&a))
+            img.attributes[it.name()] = s->value();
+        else if (auto* i = dynamic_cast<const Imf::IntAttribute*>(&a))
+            img.attributes[it.name()] = std::to_string(i->value());
+        else if (auto* f = dynamic_cast<const Imf::FloatAttribute*>(&a))
+            img.attributes[it.name()] = number_text(f->value());
+        else if (auto* d = dynamic_cast<const Imf::DoubleAttribute*>(&a))
+            img.attributes[it.name()] = number_text(d->value());
+    }
+    return img;
+}
+
+// Writes all of bytes to path via path.tmp, fsync and rename, so a crash leaves the old file or
+// the new one. The directory is synced too so the rename itself survives a power cut.
+void write_file_atomic(const std::string& path, const std::vector<uint8_t>& bytes) {
+    const std::string tmp = path + ".tmp";
+    auto fail = [&](const char* what) {
+        const int err = errno;
+        ::unlink(tmp.c_str());
+        throw std::runtime_error("write_exr: " + path + ": " + what + ": " + std::strerror(err));
+    };
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        const int err = errno;
+        throw std::runtime_error("write_exr: " + path + ": cannot create " + tmp + ": " + std::strerror(err));
+    }
+    size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            ::close(fd);
+            fail("write");
+        }
+        done += size_t(n);
+    }
+    if (::fsync(fd) != 0) {
+        ::close(fd);
+        fail("fsync");
+    }
+    if (::close(fd) != 0) fail("close");
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) fail("rename");
+    const size_t slash = path.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+    const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd >= 0) {
+        ::fsync(dfd);  // best effort: the file is complete and in place either way
+        ::close(dfd);
+    }
+}
+
+}  // namespace
+
+void write_exr(const std::string& path, const Film& film, const ExrMeta& meta) {
+    std::vector<uint8_t> bytes;
+    try {
+        bytes = encode(film, film.crop(), meta);
+    } catch (const std::exception& e) {
+        throw std::runtime_error("write_exr: " + path + ": " + e.what());
+    }
+    write_file_atomic(path, bytes);
+}
+
+ExrImage read_exr(const std::string& path, long long max_pixels) {
+    try {
+        Imf::InputFile file(path.c_str());
+        return read_image(file, max_pixels);
+    } catch (const std::exception& e) {
+        throw std::runtime_error("read_exr: " + path + ": " + e.what());
+    }
+}
+
+std::vector<uint8_t> encode_exr_tile(const Film& film, const Rect& rect, const ExrMeta& meta) {
+    return encode(film, rect, meta);
+}
+
+ExrImage decode_exr_memory(std::span<const uint8_t> bytes, long long max_pixels) {
+    try {
+        // OpenEXR's fuzz-tested validator: it reads the data through every API with memory
+        // limits, so inputs that could drive the decoders into trouble are turned away first.
+        if (Imf::checkOpenEXRFile(reinterpret_cast<const char*>(bytes.data()), bytes.size(), true, true, true))
+            throw std::runtime_error("invalid EXR data");
+        MemIStream is(bytes);
+        Imf::InputFile file(is);
+        return read_image(file, max_pixels);
+    } catch (const std::exception& e) {
+        throw std::runtime_error(std::string("decode_exr_memory: ") + e.what());
+    }
+}
+
+}  // namespace omega

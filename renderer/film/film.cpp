@@ -1,0 +1,255 @@
+#include "film/film.h"
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace omega {
+
+namespace {
+
+Rect crop_of(const FilmDesc& d) {
+    if (d.width <= 0 || d.height <= 0)
+        throw std::invalid_argument("film size must be positive, got " + std::to_string(d.width) + "x" +
+                                    std::to_string(d.height));
+    if (!d.has_crop) return {0, 0, d.width, d.height};
+    Rect r{d.crop[0], d.crop[1], d.crop[2], d.crop[3]};
+    if (r.x0 < 0 || r.y0 < 0 || r.x1 > d.width || r.y1 > d.height || r.x0 >= r.x1 || r.y0 >= r.y1)
+        throw std::invalid_argument("film crop [" + std::to_string(r.x0) + ", " + std::to_string(r.y0) + ", " +
+                                    std::to_string(r.x1) + ", " + std::to_string(r.y1) +
+                                    ") is empty or outside the film");
+    return r;
+}
+
+}  // namespace
+
+Film::Film(const FilmDesc& desc) : desc_(desc), filter_(desc), crop_(crop_of(desc)) {
+    px_.assign(size_t(crop_.area()), Accum{});
+}
+
+int Film::width() const { return desc_.width; }
+int Film::height() const { return desc_.height; }
+Rect Film::crop() const { return crop_; }
+
+std::vector<Rect> Film::tiles(int tile_size) const {
+    if (tile_size <= 0) throw std::invalid_argument("tile size must be positive");
+    std::vector<Rect> out;
+    for (int y = crop_.y0; y < crop_.y1; y += tile_size)
+        for (int x = crop_.x0; x < crop_.x1; x += tile_size)
+            out.push_back({x, y, std::min(x + tile_size, crop_.x1), std::min(y + tile_size, crop_.y1)});
+    return out;
+}
+
+Vec2 Film::sample_position(int x, int y, Vec2 u) const {
+    Vec2 d = filter_.sample(u);
+    return {float(x) + 0.5f + d.x, float(y) + 0.5f + d.y};
+}
+
+size_t Film::index(int x, int y) const {
+    // Cheap next to a path; a stray pixel would otherwise corrupt a neighbour silently.
+    if (x < crop_.x0 || x >= crop_.x1 || y < crop_.y0 || y >= crop_.y1)
+        throw std::out_of_range("pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") outside the film crop");
+    return size_t(y - crop_.y0) * size_t(crop_.width()) + size_t(x - crop_.x0);
+}
+
+void Film::add_sample(int x, int y, const Rgb& value) {
+    Accum& a = px_[index(x, y)];
+    // Welford: stable where sum/sum-of-squares cancels catastrophically (bright, low-variance pixels).
+    a.n += 1;
+    const double inv_n = 1.0 / double(a.n);
+    for (int c = 0; c < 3; ++c) {
+        const double v = value[c];
+        const double delta = v - a.mean[c];
+        a.mean[c] += delta * inv_n;
+        a.m2[c] += delta * (v - a.mean[c]);
+    }
+}
+
+PixelStats Film::pixel(int x, int y) const {
+    const Accum& a = px_[index(x, y)];
+    PixelStats s;
+    s.n = a.n;
+    s.mean = {a.mean[0], a.mean[1], a.mean[2]};
+    if (a.n >= 2) {
+        const double k = 1.0 / (double(a.n) * double(a.n - 1));
+        s.var_of_mean = {a.m2[0] * k, a.m2[1] * k, a.m2[2] * k};
+    }
+    return s;
+}
+
+ErrorEstimate Film::estimate_error(double eps) const {
+    ErrorEstimate e;
+    if (px_.empty()) return e;
+    double sum_rel = 0, sum_mean = 0, sum_var = 0;
+    bool unknown = false;
+    for (const Accum& a : px_) {
+        const double m = (a.mean[0] + a.mean[1] + a.mean[2]) / 3.0;
+        sum_mean += m;
+        if (a.n < 2) {
+            unknown = true;
+            continue;
+        }
+        const double v = (a.m2[0] + a.m2[1] + a.m2[2]) / (3.0 * double(a.n) * double(a.n - 1));
+        sum_var += v;
+        sum_rel += std::sqrt(v) / std::max(m, eps);
+    }
+    const double N = double(px_.size());
+    e.image_mean = sum_mean / N;
+    if (unknown) {
+        e.mean_rel_error = e.image_mean_stderr = std::numeric_limits<double>::infinity();
+    } else {
+        e.mean_rel_error = sum_rel / N;
+        // Pixels are independent, so the variance of their mean is sum(var) / N^2.
+        e.image_mean_stderr = std::sqrt(sum_var) / N;
+    }
+    return e;
+}
+
+void Film::clear() { std::fill(px_.begin(), px_.end(), Accum{}); }
+
+void Film::merge(const Film& other) {
+    if (other.desc_.width != desc_.width || other.desc_.height != desc_.height || other.crop_.x0 != crop_.x0 ||
+        other.crop_.y0 != crop_.y0 || other.crop_.x1 != crop_.x1 || other.crop_.y1 != crop_.y1)
+        throw std::invalid_argument("Film::merge: films differ in size or crop");
+    for (size_t i = 0; i < px_.size(); ++i) {
+        Accum& a = px_[i];
+        const Accum& b = other.px_[i];
+        if (b.n == 0) continue;
+        if (a.n == 0) {
+            a = b;
+            continue;
+        }
+        const double na = double(a.n), nb = double(b.n), n = na + nb;
+        for (int c = 0; c < 3; ++c) {
+            const double delta = b.mean[c] - a.mean[c];
+            a.mean[c] += delta * (nb / n);
+            a.m2[c] += b.m2[c] + delta * delta * (na * nb / n);
+        }
+        a.n += b.n;
+    }
+}
+
+// ---- Serialization ------------------------------------------------------------------------
+//
+// Layout, all little-endian:
+//   char[8] "OMGFILM\0" | u32 version | i32 width, height, crop x0, y0, x1, y1 | u64 pixel count
+//   pixel count x { u64 n | f64 mean[3] | f64 m2[3] }   (crop, row-major)
+//   u64 checksum of every byte before it (FNV-1a over little-endian 64-bit words, then the
+//   remaining bytes: word-at-a-time keeps a 1024^2 checkpoint fast)
+// The checksum catches torn or bit-flipped checkpoints that size checks alone would load.
+
+namespace {
+
+constexpr char kMagic[8] = {'O', 'M', 'G', 'F', 'I', 'L', 'M', '\0'};
+constexpr uint32_t kVersion = 1;
+constexpr size_t kHeaderBytes = 8 + 4 + 6 * 4 + 8;
+constexpr size_t kPixelBytes = 8 + 6 * 8;
+
+uint64_t load_le64(const uint8_t* p) {
+    uint64_t v = 0;
+    for (int i = 0; i < 8; ++i) v |= uint64_t(p[i]) << (8 * i);  // compilers fuse this to one load
+    return v;
+}
+
+uint64_t checksum(const uint8_t* p, size_t n) {
+    uint64_t h = 0xcbf29ce484222325ULL;
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+        h ^= load_le64(p + i);
+        h *= 0x100000001b3ULL;
+        h ^= h >> 29;  // a 64-bit word needs more mixing than FNV's byte step gives
+    }
+    for (; i < n; ++i) {
+        h ^= p[i];
+        h *= 0x100000001b3ULL;
+    }
+    return h;
+}
+
+struct Writer {
+    uint8_t* p;
+    void u64(uint64_t v) {
+        for (int i = 0; i < 8; ++i) p[i] = uint8_t(v >> (8 * i));
+        p += 8;
+    }
+    void u32(uint32_t v) {
+        for (int i = 0; i < 4; ++i) p[i] = uint8_t(v >> (8 * i));
+        p += 4;
+    }
+    void f64(double v) { u64(std::bit_cast<uint64_t>(v)); }
+};
+
+struct Reader {
+    const uint8_t* p;
+    uint64_t u64() {
+        const uint64_t v = load_le64(p);
+        p += 8;
+        return v;
+    }
+    uint32_t u32() {
+        uint32_t v = 0;
+        for (int i = 0; i < 4; ++i) v |= uint32_t(p[i]) << (8 * i);
+        p += 4;
+        return v;
+    }
+    int32_t i32() { return int32_t(u32()); }
+    double f64() { return std::bit_cast<double>(u64()); }
+};
+
+[[noreturn]] void corrupt(const std::string& why) { throw std::runtime_error("film checkpoint: " + why); }
+
+}  // namespace
+
+std::vector<uint8_t> Film::serialize() const {
+    std::vector<uint8_t> out(kHeaderBytes + px_.size() * kPixelBytes + 8);
+    std::memcpy(out.data(), kMagic, 8);
+    Writer w{out.data() + 8};
+    w.u32(kVersion);
+    for (int v : {desc_.width, desc_.height, crop_.x0, crop_.y0, crop_.x1, crop_.y1}) w.u32(uint32_t(v));
+    w.u64(px_.size());
+    for (const Accum& a : px_) {
+        w.u64(a.n);
+        for (double v : a.mean) w.f64(v);
+        for (double v : a.m2) w.f64(v);
+    }
+    w.u64(checksum(out.data(), out.size() - 8));
+    return out;
+}
+
+Film Film::deserialize(const FilmDesc& desc, std::span<const uint8_t> bytes) {
+    Film film(desc);
+    if (bytes.size() < kHeaderBytes + 8) corrupt("truncated header (" + std::to_string(bytes.size()) + " bytes)");
+    if (std::memcmp(bytes.data(), kMagic, 8) != 0) corrupt("bad magic");
+    Reader r{bytes.data() + 8};
+    const uint32_t version = r.u32();
+    if (version != kVersion) corrupt("unsupported version " + std::to_string(version));
+    const int w = r.i32(), h = r.i32(), x0 = r.i32(), y0 = r.i32(), x1 = r.i32(), y1 = r.i32();
+    const uint64_t count = r.u64();
+    // Check the count against the actual size before trusting it in any arithmetic.
+    if (count > (bytes.size() - kHeaderBytes - 8) / kPixelBytes ||
+        bytes.size() != kHeaderBytes + count * kPixelBytes + 8)
+        corrupt("size " + std::to_string(bytes.size()) + " does not match pixel count " + std::to_string(count));
+    Reader tail{bytes.data() + bytes.size() - 8};
+    if (tail.u64() != checksum(bytes.data(), bytes.size() - 8)) corrupt("checksum mismatch");
+    const Rect c = film.crop_;
+    if (w != desc.width || h != desc.height || x0 != c.x0 || y0 != c.y0 || x1 != c.x1 || y1 != c.y1 ||
+        count != film.px_.size())
+        corrupt("written for a film of another size or crop");
+    for (Accum& a : film.px_) {
+        a.n = r.u64();
+        for (double& v : a.mean) v = r.f64();
+        for (double& v : a.m2) v = r.f64();
+        for (int k = 0; k < 3; ++k)
+            if (!std::isfinite(a.mean[k]) || !std::isfinite(a.m2[k]) || a.m2[k] < 0)
+                corrupt("non-finite or negative statistics");
+        if (a.n == 0 && (a.mean[0] != 0 || a.mean[1] != 0 || a.mean[2] != 0 || a.m2[0] != 0 || a.m2[1] != 0 ||
+                         a.m2[2] != 0))
+            corrupt("statistics for an empty pixel");
+    }
+    return film;
+}
+
+}  // namespace omega

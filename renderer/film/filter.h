@@ -1,0 +1,46 @@
+#pragma once
+// Pixel reconstruction filters, used only through importance sampling: a sample's film position
+// is drawn from the filter's normalized density around the pixel centre, so it carries weight 1
+// and the film stays a plain per-pixel sample mean (see film.h).
+//
+// All filters are separable: f(x, y) = f1(x) f1(y), each axis drawn from one uniform.
+#include "math/vec.h"
+#include "scene/scene_desc.h"
+
+namespace omega {
+
+// Radius used when a scene names a filter without one. Filter(const FilmDesc&) takes
+// desc.filter_radius as given (FilmDesc's default 0.5 suits only the box), so whoever fills a
+// FilmDesc for a tent or Gaussian must substitute this.
+float default_filter_radius(FilterType type);
+
+class Filter {
+public:
+    // Throws std::invalid_argument for a non-positive or non-finite radius or stddev.
+    explicit Filter(const FilmDesc& desc);
+    Filter(FilterType type, float radius, float gaussian_stddev = 0.5f);
+
+    FilterType type() const { return type_; }
+    float radius() const { return radius_; }
+
+    // Offset from the pixel centre, in pixels, in [-radius, radius]^2, distributed exactly
+    // with density pdf(). Uses u.x for the x axis and u.y for the y axis, nothing else.
+    Vec2 sample(Vec2 u) const;
+    // Normalized density (integrates to 1 over the plane).
+    double pdf(double x, double y) const { return pdf_1d(x) * pdf_1d(y); }
+    double pdf_1d(double x) const;
+
+private:
+    double sample_1d(double u) const;
+
+    FilterType type_;
+    float radius_;
+    double sigma_ = 0.5;
+    // Gaussian: erf(radius / (sigma sqrt 2)), the mass inside the truncation.
+    double erf_r_ = 1.0;
+};
+
+// Inverse of std::erf on (-1, 1), accurate to a few ulp in double.
+double erf_inv(double p);
+
+}  // namespace omega
