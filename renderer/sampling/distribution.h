@@ -1,6 +1,7 @@
 #pragma once
 // Discrete distribution over n items by weight (light selection, triangle selection by area).
 #include <cstdint>
+#include <cstddef>
 #include <vector>
 
 namespace omega {
