@@ -289,7 +289,7 @@ void parse_film(ParamBag b, FilmDesc& f) {
             f.filter_radius = 4.f * f.gaussian_stddev;  // Mitsuba's cut-off
             break;
     }
-    reject(b, "stddev", "by a box or tent filter");
+    if (f.filter != FilterType::Gaussian) reject(b, "stddev", "by a box or tent filter");
     if (auto v = b.get("crop")) {
         if (!v->is_list() || v->node().size() != 4) v->fail("expected [x0, y0, x1, y1], got " + v->describe());
         auto items = v->as_list();
@@ -388,7 +388,10 @@ ShapeDesc parse_shape(const ParamValue& item, size_t index, ShapeCtx& ctx) {
     }
     if (s.type == ShapeType::Sphere) {
         s.center = b.get_vec3("center", s.center);
-        s.radius = float_in(b, "radius", float(s.radius), 0, true, kInf, false);
+        if (auto v = b.get("radius")) {
+            s.radius = v->as_double();
+            check_in(*v, s.radius, 0, true, kInf, false);
+        }
     } else {
         reject(b, "center", "by this shape type (only sphere)");
         reject(b, "radius", "by this shape type (only sphere)");
