@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 #include "bsdf/metals.h"
 #include "scene/test_helpers.h"
@@ -353,4 +355,21 @@ TEST(SceneParser, Warnings) {
     ASSERT_EQ(d.warnings.size(), 2u);
     EXPECT_EQ(d.warnings[0], "scene.yaml:4: materials.unused: never used by any shape");
     EXPECT_EQ(d.warnings[1], "scene.yaml:1: the scene has no light source; the image will be black");
+}
+
+TEST(SceneParser, DocumentationExampleParses) {
+    std::ifstream in(source_root() / "docs/scene-format.md");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    std::string doc = ss.str();
+    size_t start = doc.find("```yaml\n");
+    ASSERT_NE(start, std::string::npos);
+    start += 8;
+    std::string yaml = doc.substr(start, doc.find("```", start) - start);
+    TempDir dir;
+    dir.write("meshes/bunny.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    SceneDesc d = parse_scene_file(dir.write("scene.yaml", yaml).string());
+    EXPECT_EQ(d.shapes.size(), 5u);
+    EXPECT_EQ(d.lights.size(), 1u);
+    EXPECT_TRUE(d.warnings.empty()) << d.warnings[0];
 }
