@@ -2,6 +2,7 @@
 // Discrete distribution over n items by weight (light selection, triangle selection by area).
 #include <cstddef>
 #include <cstdint>
+#include <cstddef>
 #include <vector>
 
 namespace omega {

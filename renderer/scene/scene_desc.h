@@ -17,6 +17,7 @@ namespace omega {
 struct SourceLoc {
     std::string file;
     int line = 0;  // 1-based; 0 when unknown
+    std::string key;  // dotted key path, e.g. "shapes[2]"; empty when unknown
 };
 
 enum class IntegratorType { Path, Light, Bdpt };
@@ -76,6 +77,7 @@ enum class ShapeType { Mesh, Rectangle, Cube, Sphere, Disk };
 
 struct ShapeDesc {
     ShapeType type = ShapeType::Rectangle;
+    std::string name;          // optional, for messages (Mitsuba's id)
     Mat4 to_world;
     std::string file;          // mesh: absolute path, checked to exist at parse time
     Vec3d center{0, 0, 0};     // sphere: in addition to to_world

@@ -1,0 +1,533 @@
+#include "scene/scene_parser.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "bsdf/metals.h"
+
+namespace omega {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Range text in interval notation so the message says exactly which ends are allowed.
+std::string range_text(double lo, bool lo_open, double hi, bool hi_open) {
+    if (hi == kInf) return fmt::format("must be {} {}", lo_open ? ">" : ">=", lo);
+    return fmt::format("must be in {}{}, {}{}", lo_open ? "(" : "[", lo, hi, hi_open ? ")" : "]");
+}
+
+void check_in(const ParamValue& v, double x, double lo, bool lo_open, double hi, bool hi_open) {
+    bool ok = (lo_open ? x > lo : x >= lo) && (hi_open ? x < hi : x <= hi);
+    if (!ok) v.fail(fmt::format("{}, got {}", range_text(lo, lo_open, hi, hi_open), x));
+}
+
+float float_in(ParamBag& b, const std::string& key, float def, double lo, bool lo_open, double hi, bool hi_open) {
+    auto v = b.get(key);
+    if (!v) return def;
+    float x = v->as_float();
+    check_in(*v, x, lo, lo_open, hi, hi_open);
+    return x;
+}
+
+Rgb rgb_in(ParamBag& b, const std::string& key, Rgb def, double lo, double hi) {
+    auto v = b.get(key);
+    if (!v) return def;
+    Rgb c = v->as_rgb();
+    for (int i = 0; i < 3; ++i)
+        if (c[i] < lo || c[i] > hi)
+            v->fail(fmt::format("components {}, got [{}, {}, {}]", range_text(lo, false, hi, false), c.x, c.y, c.z));
+    return c;
+}
+
+Rgb required_rgb_nonneg(ParamBag& b, const std::string& key) {
+    b.require(key);  // for the "missing key" message; rgb_in reads it again
+    return rgb_in(b, key, Rgb{}, 0, kInf);
+}
+
+// Keys that belong to another variant get a clearer message than "unknown key".
+void reject(ParamBag& b, const std::string& key, const std::string& why) {
+    if (auto v = b.get(key)) v->fail("not used " + why);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Transforms
+
+Mat4 transform_op(const std::string& op, const ParamValue& v) {
+    if (op == "matrix") {
+        if (!v.is_list() || v.node().size() != 16) v.fail("expected 16 numbers (row-major), got " + v.describe());
+        auto items = v.as_list();
+        Mat4 m;
+        for (size_t i = 0; i < 16; ++i) m.m[i] = items[i].as_double();
+        return m;
+    }
+    if (op == "look_at") {
+        ParamBag b(v);
+        Vec3d origin = b.require("origin").as_vec3();
+        Vec3d target = b.require("target").as_vec3();
+        Vec3d up = b.require("up").as_vec3();
+        b.check_unused();
+        Vec3d dir = target - origin;
+        if (length(dir) == 0 || !std::isfinite(length(dir))) v.fail("origin and target must differ");
+        Vec3d l = cross(normalize(up), normalize(dir));
+        if (!(length(l) > 1e-9)) v.fail("up must not be zero or parallel to the view direction");
+        return Mat4::look_at(origin, target, up);
+    }
+    if (op == "translate") return Mat4::translate(v.as_vec3());
+    if (op == "rotate") {
+        ParamBag b(v);
+        ParamValue axis_v = b.require("axis");
+        Vec3d axis = axis_v.as_vec3();
+        double angle = b.require("angle").as_double();
+        b.check_unused();
+        if (!(length(axis) > 0) || !std::isfinite(length(axis))) axis_v.fail("axis must be a non-zero vector");
+        return Mat4::rotate(axis, angle);
+    }
+    // scale: a number or a vector
+    if (v.is_scalar()) {
+        double s = v.as_double();
+        return Mat4::scale({s, s, s});
+    }
+    if (!v.is_list()) v.fail("expected a number or [x, y, z], got " + v.describe());
+    return Mat4::scale(v.as_vec3());
+}
+
+const std::initializer_list<const char*> kTransformOps = {"matrix", "look_at", "translate", "rotate", "scale"};
+
+// A mapping holding exactly one transform operation.
+Mat4 single_op(const ParamValue& v) {
+    ParamBag b(v);
+    std::vector<std::pair<std::string, ParamValue>> ops;
+    for (const char* op : kTransformOps)
+        if (auto x = b.get(op)) ops.emplace_back(op, *x);
+    b.check_unused();
+    if (ops.size() != 1)
+        v.fail("expected exactly one of matrix, look_at, translate, rotate, scale (use a list to combine them)");
+    return transform_op(ops[0].first, ops[0].second);
+}
+
+}  // namespace
+
+Mat4 parse_to_world(const ParamValue& v) {
+    Mat4 m;
+    if (v.is_list()) {
+        // Mitsuba order: the first operation applies to the points first, so it is the rightmost.
+        for (const ParamValue& item : v.as_list()) m = single_op(item) * m;
+    } else if (v.is_map()) {
+        m = single_op(v);
+    } else {
+        v.fail("expected a transform mapping or a list of them, got " + v.describe());
+    }
+    if (!m.is_finite()) v.fail("matrix is not finite");
+    if (m(3, 0) != 0 || m(3, 1) != 0 || m(3, 2) != 0 || m(3, 3) != 1)
+        v.fail("last row must be [0, 0, 0, 1] (an affine transform)");
+    double s = 0;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) s = std::max(s, std::abs(m(r, c)));
+    double det = m.det3();
+    // Relative test: the cornell-box matrices have 1e-8 entries that are harmless, a zero scale is not.
+    if (s == 0 || !(std::abs(det) > 1e-12 * s * s * s) || !m.inverse()) v.fail("matrix is singular");
+    return m;
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Materials
+
+enum class MatType { Diffuse, Conductor, Dielectric, Black };
+
+void parse_alpha(ParamBag& b, float& au, float& av) {
+    bool iso = b.has("alpha"), aniso = b.has("alpha_u") || b.has("alpha_v");
+    if (iso && aniso) b.get("alpha")->fail("give either alpha or alpha_u/alpha_v, not both");
+    if (iso) {
+        au = av = float_in(b, "alpha", 0.f, 0, false, 1, false);
+    } else if (aniso) {
+        b.require("alpha_u");
+        b.require("alpha_v");
+        au = float_in(b, "alpha_u", 0.f, 0, false, 1, false);
+        av = float_in(b, "alpha_v", 0.f, 0, false, 1, false);
+        if ((au == 0) != (av == 0)) b.get("alpha_v")->fail("alpha_u and alpha_v must both be 0 (smooth) or both > 0");
+    }
+}
+
+MicrofacetType parse_distribution(ParamBag& b) {
+    return b.get_enum<MicrofacetType>("distribution", {{"ggx", MicrofacetType::GGX}, {"beckmann", MicrofacetType::Beckmann}},
+                                      MicrofacetType::GGX);
+}
+
+// Mitsuba's table of named refractive indices, plus "glass".
+std::optional<double> named_ior(const std::string& s) {
+    static const std::pair<const char*, double> table[] = {
+        {"vacuum", 1.0},           {"helium", 1.000036},        {"hydrogen", 1.000132},
+        {"air", 1.000277},         {"carbon dioxide", 1.00045}, {"water", 1.3330},
+        {"acetone", 1.36},         {"ethanol", 1.361},          {"carbon tetrachloride", 1.461},
+        {"glycerol", 1.4729},      {"benzene", 1.501},          {"silicone oil", 1.52045},
+        {"bromine", 1.661},        {"water ice", 1.31},         {"fused quartz", 1.458},
+        {"pyrex", 1.470},          {"acrylic glass", 1.49},     {"polypropylene", 1.49},
+        {"bk7", 1.5046},           {"glass", 1.5},              {"sodium chloride", 1.544},
+        {"amber", 1.55},           {"pet", 1.5750},             {"polystyrene", 1.55},
+        {"diamond", 2.419},
+    };
+    for (auto& [name, v] : table)
+        if (s == name) return v;
+    return std::nullopt;
+}
+
+float parse_ior(ParamBag& b, const std::string& key, float def) {
+    auto v = b.get(key);
+    if (!v) return def;
+    if (v->is_scalar()) {
+        if (auto x = named_ior(v->node().Scalar())) return float(*x);
+        const std::string& s = v->node().Scalar();
+        bool numeric = !s.empty() && (std::isdigit(static_cast<unsigned char>(s[0])) || s[0] == '.' || s[0] == '-' || s[0] == '+');
+        if (!numeric)
+            v->fail("expected a number or a named IOR (vacuum, air, water, bk7, glass, diamond, ...), got " + v->describe());
+    }
+    float x = v->as_float();
+    check_in(*v, x, 0, true, kInf, false);
+    return x;
+}
+
+MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::vector<std::string>& warnings) {
+    ParamBag b(v);
+    MaterialDesc m;
+    m.name = name;
+    m.loc = v.loc();
+    MatType type = ParamBag::enum_value<MatType>(b.require("type"), {{"diffuse", MatType::Diffuse},
+                                                                     {"conductor", MatType::Conductor},
+                                                                     {"dielectric", MatType::Dielectric},
+                                                                     {"black", MatType::Black}});
+    switch (type) {
+        case MatType::Diffuse: {
+            DiffuseBsdf d;
+            d.reflectance = rgb_in(b, "reflectance", d.reflectance, 0, 1);
+            d.two_sided = b.get_bool("two_sided", true);
+            m.bsdf = d;
+            break;
+        }
+        case MatType::Conductor: {
+            ConductorBsdf c;
+            if (auto mat = b.get("material")) {
+                if (b.has("eta") || b.has("k")) mat->fail("give either material or eta/k, not both");
+                std::string metal = mat->as_string();
+                auto ior = named_metal_ior(metal);
+                if (!ior) mat->fail("unknown metal '" + metal + "' (known: Au, Ag, Cu, Al)");
+                c.eta = ior->first;
+                c.k = ior->second;
+                c.has_ior = true;
+            } else if (b.has("eta") || b.has("k")) {
+                // A lone eta or k would silently pair with a made-up other half.
+                b.require("eta");
+                b.require("k");
+                c.eta = rgb_in(b, "eta", c.eta, 0, kInf);
+                c.k = rgb_in(b, "k", c.k, 0, kInf);
+                c.has_ior = true;
+            }
+            c.specular_reflectance = rgb_in(b, "specular_reflectance", c.specular_reflectance, 0, 1);
+            parse_alpha(b, c.alpha_u, c.alpha_v);
+            c.distribution = parse_distribution(b);
+            c.two_sided = b.get_bool("two_sided", true);
+            m.bsdf = c;
+            break;
+        }
+        case MatType::Dielectric: {
+            DielectricBsdf d;
+            // Mitsuba's defaults: BK7 glass in air.
+            float int_ior = parse_ior(b, "int_ior", 1.5046f);
+            float ext_ior = parse_ior(b, "ext_ior", 1.000277f);
+            d.eta = int_ior / ext_ior;
+            if (d.eta == 1.f)
+                warnings.push_back(fmt::format("{}:{}: {}: int_ior equals ext_ior, the interface is invisible",
+                                               m.loc.file, m.loc.line, m.loc.key));
+            d.specular_reflectance = rgb_in(b, "specular_reflectance", d.specular_reflectance, 0, 1);
+            d.specular_transmittance = rgb_in(b, "specular_transmittance", d.specular_transmittance, 0, 1);
+            parse_alpha(b, d.alpha_u, d.alpha_v);
+            d.distribution = parse_distribution(b);
+            m.bsdf = d;
+            break;
+        }
+        case MatType::Black: m.bsdf = BlackBsdf{}; break;
+    }
+    b.check_unused();
+    return m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sections
+
+void parse_integrator(ParamBag b, IntegratorDesc& it) {
+    it.type = b.get_enum<IntegratorType>(
+        "type", {{"path", IntegratorType::Path}, {"light", IntegratorType::Light}, {"bdpt", IntegratorType::Bdpt}},
+        it.type);
+    if (auto v = b.get("max_depth")) {
+        it.max_depth = int(v->as_int(-1, 1 << 20));
+        if (it.max_depth == 0) v->fail("must be -1 (unbounded) or >= 1, got 0");
+    }
+    it.rr_depth = b.get_int("rr_depth", it.rr_depth, 1, 1 << 20);
+    b.check_unused();
+}
+
+void parse_film(ParamBag b, FilmDesc& f) {
+    f.width = b.get_int("width", f.width, 1, 1 << 16);
+    f.height = b.get_int("height", f.height, 1, 1 << 16);
+    f.filter = b.get_enum<FilterType>(
+        "filter", {{"box", FilterType::Box}, {"tent", FilterType::Tent}, {"gaussian", FilterType::Gaussian}}, f.filter);
+    switch (f.filter) {
+        case FilterType::Box: f.filter_radius = 0.5f; break;
+        case FilterType::Tent: f.filter_radius = 1.f; break;
+        case FilterType::Gaussian:
+            f.gaussian_stddev = float_in(b, "stddev", f.gaussian_stddev, 0, true, 16, false);
+            f.filter_radius = 4.f * f.gaussian_stddev;  // Mitsuba's cut-off
+            break;
+    }
+    if (f.filter != FilterType::Gaussian) reject(b, "stddev", "by a box or tent filter");
+    if (auto v = b.get("crop")) {
+        if (!v->is_list() || v->node().size() != 4) v->fail("expected [x0, y0, x1, y1], got " + v->describe());
+        auto items = v->as_list();
+        for (int i = 0; i < 4; ++i) f.crop[size_t(i)] = int(items[size_t(i)].as_int(0, 1 << 16));
+        auto [x0, y0, x1, y1] = f.crop;
+        if (!(x0 < x1 && x1 <= f.width && y0 < y1 && y1 <= f.height))
+            v->fail(fmt::format("must satisfy 0 <= x0 < x1 <= width ({}) and 0 <= y0 < y1 <= height ({}), got [{}, {}, {}, {}]",
+                                f.width, f.height, x0, y0, x1, y1));
+        f.has_crop = true;
+    } else {
+        f.crop = {0, 0, f.width, f.height};
+    }
+    b.check_unused();
+}
+
+void parse_sensor(ParamBag b, SensorDesc& s) {
+    s.loc = b.self().loc();
+    s.type = b.get_enum<SensorType>("type",
+                                    {{"perspective", SensorType::Perspective},
+                                     {"thin_lens", SensorType::ThinLens},
+                                     {"orthographic", SensorType::Orthographic}},
+                                    s.type);
+    if (s.type == SensorType::Orthographic) {
+        reject(b, "fov", "by an orthographic sensor (its to_world scale sets the extent)");
+        reject(b, "fov_axis", "by an orthographic sensor");
+    } else {
+        s.fov = float_in(b, "fov", s.fov, 0, true, 180, true);
+        s.fov_axis = b.get_enum<char>("fov_axis", {{"x", 'x'}, {"y", 'y'}}, s.fov_axis);
+    }
+    if (s.type == SensorType::ThinLens) {
+        s.aperture_radius = float_in(b, "aperture_radius", s.aperture_radius, 0, false, kInf, false);
+        s.focus_distance = float_in(b, "focus_distance", s.focus_distance, 0, true, kInf, false);
+    } else {
+        reject(b, "aperture_radius", "by this sensor type (only thin_lens)");
+        reject(b, "focus_distance", "by this sensor type (only thin_lens)");
+    }
+    if (auto v = b.get("to_world")) s.to_world = parse_to_world(*v);
+    s.near_clip = float_in(b, "near_clip", s.near_clip, 0, false, kInf, false);
+    if (auto f = b.opt_bag("film")) parse_film(*f, s.film);
+    else s.film.crop = {0, 0, s.film.width, s.film.height};
+    if (auto v = b.get("spp")) s.halt.spp = v->as_int(1, 1LL << 40);
+    if (auto v = b.get("time")) {
+        s.halt.time_s = v->as_double();
+        check_in(*v, *s.halt.time_s, 0, true, kInf, false);
+    }
+    if (auto v = b.get("target_error")) {
+        s.halt.target_error = v->as_double();
+        check_in(*v, *s.halt.target_error, 0, true, kInf, false);
+    }
+    b.check_unused();
+}
+
+EmitterDesc parse_emitter(ParamBag b) {
+    EmitterDesc e;
+    ParamBag::enum_value<int>(b.require("type"), {{"area", 0}});
+    e.radiance = required_rgb_nonneg(b, "radiance");
+    e.two_sided = b.get_bool("two_sided", false);
+    b.check_unused();
+    return e;
+}
+
+struct ShapeCtx {
+    fs::path dir;
+    SceneDesc* desc;
+    std::set<std::string>* referenced;
+};
+
+ShapeDesc parse_shape(const ParamValue& item, size_t index, ShapeCtx& ctx) {
+    ParamBag b(item);
+    ShapeDesc s;
+    s.loc = item.loc();
+    s.type = ParamBag::enum_value<ShapeType>(b.require("type"), {{"mesh", ShapeType::Mesh},
+                                                                 {"rectangle", ShapeType::Rectangle},
+                                                                 {"cube", ShapeType::Cube},
+                                                                 {"sphere", ShapeType::Sphere},
+                                                                 {"disk", ShapeType::Disk}});
+    s.name = b.get_string("name", "");
+    if (auto v = b.get("to_world")) s.to_world = parse_to_world(*v);
+    if (s.type == ShapeType::Mesh) {
+        ParamValue fv = b.require("file");
+        std::string file = fv.as_string();
+        if (file.empty()) fv.fail("must not be empty");
+        fs::path p(file);
+        if (p.is_relative()) p = ctx.dir / p;
+        std::error_code ec;
+        bool ok = fs::is_regular_file(p, ec) && std::ifstream(p).good();
+        if (!ok) fv.fail("cannot open '" + file + "'");
+        fs::path abs = fs::absolute(p, ec);
+        s.file = (ec ? p : abs).lexically_normal().string();
+        s.face_normals = b.get_bool("face_normals", false);
+        s.drop_degenerate = b.get_bool("drop_degenerate", false);
+    } else {
+        reject(b, "file", "by this shape type (only mesh)");
+        reject(b, "face_normals", "by this shape type (only mesh)");
+        reject(b, "drop_degenerate", "by this shape type (only mesh)");
+    }
+    if (s.type == ShapeType::Sphere) {
+        s.center = b.get_vec3("center", s.center);
+        if (auto v = b.get("radius")) {
+            s.radius = v->as_double();
+            check_in(*v, s.radius, 0, true, kInf, false);
+        }
+    } else {
+        reject(b, "center", "by this shape type (only sphere)");
+        reject(b, "radius", "by this shape type (only sphere)");
+    }
+    if (auto v = b.get("material")) {
+        if (v->is_map()) {
+            std::string name = fmt::format("shapes[{}].material", index);
+            while (ctx.desc->materials.count(name)) name += "'";
+            ctx.desc->materials[name] = parse_material(*v, name, ctx.desc->warnings);
+            s.material = name;
+        } else {
+            std::string ref = v->as_string();
+            auto it = ctx.desc->materials.find(ref);
+            // Only named materials can be referenced; inline and default ones have internal names.
+            if (it == ctx.desc->materials.end() || it->second.loc.key.rfind("materials.", 0) != 0)
+                v->fail("unknown material '" + ref + "'");
+            ctx.referenced->insert(ref);
+            s.material = ref;
+        }
+    } else {
+        // Mitsuba's default: a grey diffuse surface.
+        const std::string name = "(default)";
+        if (!ctx.desc->materials.count(name)) ctx.desc->materials[name] = MaterialDesc{name, DiffuseBsdf{}, s.loc};
+        s.material = name;
+    }
+    if (auto e = b.opt_bag("emitter")) s.emitter = parse_emitter(*e);
+    s.flip_normals = b.get_bool("flip_normals", false);
+    b.check_unused();
+    return s;
+}
+
+LightDesc parse_light(const ParamValue& item) {
+    ParamBag b(item);
+    LightDesc l;
+    l.loc = item.loc();
+    l.type = ParamBag::enum_value<LightType>(b.require("type"), {{"point", LightType::Point},
+                                                                 {"spot", LightType::Spot},
+                                                                 {"directional", LightType::Directional},
+                                                                 {"constant", LightType::Constant}});
+    switch (l.type) {
+        case LightType::Point:
+            l.position = b.get_vec3("position", l.position);
+            l.intensity = required_rgb_nonneg(b, "intensity");
+            break;
+        case LightType::Spot: {
+            if (auto v = b.get("to_world")) l.to_world = parse_to_world(*v);
+            l.intensity = required_rgb_nonneg(b, "intensity");
+            l.cutoff_angle = float_in(b, "cutoff_angle", 20.f, 0, true, 90, false);
+            l.beam_width = 0.75f * l.cutoff_angle;
+            if (auto v = b.get("beam_width")) {
+                l.beam_width = v->as_float();
+                check_in(*v, l.beam_width, 0, true, l.cutoff_angle, false);
+            }
+            break;
+        }
+        case LightType::Directional: {
+            ParamValue dv = b.require("direction");
+            Vec3d d = dv.as_vec3();
+            if (!(length(d) > 0) || !std::isfinite(length(d))) dv.fail("must be a non-zero vector");
+            l.direction = normalize(d);
+            l.irradiance = required_rgb_nonneg(b, "irradiance");
+            break;
+        }
+        case LightType::Constant: l.radiance = required_rgb_nonneg(b, "radiance"); break;
+    }
+    b.check_unused();
+    return l;
+}
+
+SceneDesc parse_root(const YAML::Node& root, const std::string& file, const fs::path& dir) {
+    auto fname = std::make_shared<const std::string>(file);
+    SceneDesc desc;
+    desc.path = file;
+    ParamBag top(ParamValue(root, "", fname, 1));
+
+    auto ver = top.get("omega");
+    if (!ver) throw SceneError(fmt::format("{}:1: omega: missing key (a v1 scene starts with 'omega: 1')", file));
+    long long version = ver->as_int();
+    if (version != 1)
+        ver->fail(fmt::format("unsupported scene format version {} (this build reads version 1)", version));
+
+    if (auto b = top.opt_bag("integrator")) parse_integrator(*b, desc.integrator);
+    if (auto b = top.opt_bag("sensor")) parse_sensor(*b, desc.sensor);
+    else desc.sensor.film.crop = {0, 0, desc.sensor.film.width, desc.sensor.film.height};
+
+    if (auto mats = top.opt_bag("materials")) {
+        for (const std::string& name : mats->keys()) {
+            ParamValue v = *mats->get(name);
+            if (name.empty()) v.fail("material names must not be empty");
+            desc.materials[name] = parse_material(v, name, desc.warnings);
+        }
+    }
+
+    std::set<std::string> referenced;
+    ShapeCtx ctx{dir, &desc, &referenced};
+    std::vector<ParamValue> shapes = top.list("shapes");
+    for (size_t i = 0; i < shapes.size(); ++i) desc.shapes.push_back(parse_shape(shapes[i], i, ctx));
+    for (const ParamValue& v : top.list("lights")) desc.lights.push_back(parse_light(v));
+    top.check_unused();
+
+    for (auto& [name, m] : desc.materials)
+        if (m.loc.key.rfind("materials.", 0) == 0 && !referenced.count(name))
+            desc.warnings.push_back(fmt::format("{}:{}: {}: never used by any shape", m.loc.file, m.loc.line, m.loc.key));
+    bool any_light = !desc.lights.empty();
+    for (const ShapeDesc& s : desc.shapes) any_light |= s.emitter.has_value() && !is_black(s.emitter->radiance);
+    if (!any_light) desc.warnings.push_back(fmt::format("{}:1: the scene has no light source; the image will be black", file));
+    return desc;
+}
+
+}  // namespace
+
+SceneDesc parse_scene_string(const std::string& yaml, const std::string& virtual_path) {
+    YAML::Node root;
+    try {
+        root = YAML::Load(yaml);
+    } catch (const YAML::Exception& e) {
+        throw SceneError(fmt::format("{}:{}: invalid YAML: {}", virtual_path, std::max(e.mark.line + 1, 1), e.msg));
+    }
+    fs::path dir = fs::path(virtual_path).parent_path();
+    if (dir.empty()) dir = ".";
+    try {
+        return parse_root(root, virtual_path, dir);
+    } catch (const YAML::Exception& e) {
+        // Should not happen (the bag checks node kinds first), but a library quirk must not escape
+        // as anything other than a scene error.
+        throw SceneError(fmt::format("{}:{}: invalid YAML: {}", virtual_path, std::max(e.mark.line + 1, 1), e.msg));
+    }
+}
+
+SceneDesc parse_scene_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::error_code ec;
+    if (!in || fs::is_directory(path, ec)) throw SceneError(fmt::format("{}: cannot open the scene file", path));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return parse_scene_string(ss.str(), path);
+}
+
+}  // namespace omega

@@ -1,0 +1,22 @@
+#pragma once
+// Scene format v1 (YAML) -> SceneDesc. See docs/scene-format.md for every key.
+// Throws SceneError "file:line: key: what is wrong" for any bad input; never loads meshes, but
+// checks that mesh files exist so that the error points at the scene line.
+#include <string>
+
+#include "math/transform.h"
+#include "scene/param_bag.h"
+#include "scene/scene_desc.h"
+
+namespace omega {
+
+SceneDesc parse_scene_file(const std::string& path);
+// `virtual_path` names the text in messages; relative mesh paths resolve against its folder.
+SceneDesc parse_scene_string(const std::string& yaml, const std::string& virtual_path);
+
+// A `to_world` value: {matrix: [...]}, {look_at: {...}}, a single translate/rotate/scale mapping,
+// or a list of those applied in order (the first to the points first). Checks that the result is
+// finite, affine and invertible.
+Mat4 parse_to_world(const ParamValue& v);
+
+}  // namespace omega
