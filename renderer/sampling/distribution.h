@@ -1,5 +1,6 @@
 #pragma once
 // Discrete distribution over n items by weight (light selection, triangle selection by area).
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
