@@ -53,23 +53,47 @@ bool pdf_agrees(double claimed, double actual, double rel_tol) {
     return std::abs(claimed - actual) <= rel_tol * std::max(std::abs(claimed), std::abs(actual)) + 1e-9;
 }
 
-// Integrates f over every cell of a res_x x res_y grid: each cell is split into sub x sub pieces,
-// each integrated with 3x3-point Gauss-Legendre. The rule is open (no node on a cell boundary), so
+// 3x3-point Gauss-Legendre over a rectangle. The rule is open (no node on the boundary), so
 // densities that jump exactly at a cell boundary (hemispheres, cone edges) integrate exactly.
 template <class F>
-std::vector<double> integrate_cells(F&& f, double x0, double x1, double y0, double y1, int res_x, int res_y, int sub) {
+double gauss3x3(F& f, double x0, double x1, double y0, double y1) {
     static const double kNode[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
     static const double kWeight[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+    double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1), hx = 0.5 * (x1 - x0), hy = 0.5 * (y1 - y0), sum = 0;
+    for (int b = 0; b < 3; ++b)
+        for (int a = 0; a < 3; ++a) sum += kWeight[a] * kWeight[b] * f(cx + hx * kNode[a], cy + hy * kNode[b]);
+    return sum * hx * hy;
+}
+
+// Adaptive refinement by quadrants: sharp lobes (low roughness, grazing incidence) need far finer
+// sampling than the rest of the domain, and a fixed rule overestimates their mass.
+template <class F>
+double integrate_adaptive(F& f, double x0, double x1, double y0, double y1, double whole, double tol, int depth) {
+    double xm = 0.5 * (x0 + x1), ym = 0.5 * (y0 + y1);
+    double q[4] = {gauss3x3(f, x0, xm, y0, ym), gauss3x3(f, xm, x1, y0, ym), gauss3x3(f, x0, xm, ym, y1),
+                   gauss3x3(f, xm, x1, ym, y1)};
+    double fine = q[0] + q[1] + q[2] + q[3];
+    if (depth <= 0 || std::abs(fine - whole) <= tol) return fine;
+    return integrate_adaptive(f, x0, xm, y0, ym, q[0], 0.25 * tol, depth - 1) +
+           integrate_adaptive(f, xm, x1, y0, ym, q[1], 0.25 * tol, depth - 1) +
+           integrate_adaptive(f, x0, xm, ym, y1, q[2], 0.25 * tol, depth - 1) +
+           integrate_adaptive(f, xm, x1, ym, y1, q[3], 0.25 * tol, depth - 1);
+}
+
+// Integrates f over every cell of a res_x x res_y grid, each cell split into sub x sub pieces that
+// are refined adaptively until the mass error is far below one sample's worth.
+template <class F>
+std::vector<double> integrate_cells(F&& f, double x0, double x1, double y0, double y1, int res_x, int res_y, int sub,
+                                    double abs_tol) {
     int nx = res_x * sub, ny = res_y * sub;
     double hx = (x1 - x0) / nx, hy = (y1 - y0) / ny;
     std::vector<double> cells(size_t(res_x) * res_y, 0.0);
     for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i) {
-            double cx = x0 + (i + 0.5) * hx, cy = y0 + (j + 0.5) * hy, sum = 0;
-            for (int b = 0; b < 3; ++b)
-                for (int a = 0; a < 3; ++a)
-                    sum += kWeight[a] * kWeight[b] * f(cx + 0.5 * hx * kNode[a], cy + 0.5 * hy * kNode[b]);
-            cells[size_t(j / sub) * res_x + size_t(i / sub)] += sum * 0.25 * hx * hy;
+            double ax = x0 + i * hx, ay = y0 + j * hy;
+            double whole = gauss3x3(f, ax, ax + hx, ay, ay + hy);
+            cells[size_t(j / sub) * res_x + size_t(i / sub)] +=
+                integrate_adaptive(f, ax, ax + hx, ay, ay + hy, whole, abs_tol, 7);
         }
     return cells;
 }
@@ -92,7 +116,9 @@ Chi2Result finish(std::vector<double> observed, const std::vector<double>& cell_
     if (invalid > 0) reason = "sampler returned a non-finite pdf or an invalid point / direction; ";
     if (double(mismatches) > opt.pdf_mismatch_fraction * n) reason += "claimed pdf disagrees with pdf function; ";
     if (!reason.empty()) r.passed = false;
-    r.message = reason + summary(r);
+    // Keep the specific reason from the counting stage (e.g. a sample in a zero-mass cell).
+    std::string detail = r.dof == 0 && !r.passed ? "; " + r.message : "";
+    r.message = reason + summary(r) + detail;
     return r;
 }
 }  // namespace
@@ -179,7 +205,8 @@ Chi2Result chi2_sphere(const DirSampler& sampler, const DirPdfSa& pdf_sa, const 
     };
     std::vector<double> cells =
         integrate_cells([&](double z, double phi) { return pdf_sa(dir(z, phi)); }, -1, 1, 0, two_pi, res_cos,
-                        res_phi, opt.subdivisions);
+                        res_phi, opt.subdivisions,
+                        0.01 / double(opt.sample_count));
     // cells are stored [phi][cos]; integrate_cells indexes as x = cos, y = phi.
     std::vector<double> observed(cells.size(), 0.0);
     Rng rng(opt.seed, 0);
@@ -209,7 +236,7 @@ Chi2Result chi2_plane(const PointSampler& sampler, const PointPdfArea& pdf_area,
                       int res_x, int res_y) {
     std::vector<double> cells = integrate_cells(
         [&](double x, double y) { return pdf_area(Vec2{float(x), float(y)}); }, domain.x0, domain.x1, domain.y0,
-        domain.y1, res_x, res_y, opt.subdivisions);
+        domain.y1, res_x, res_y, opt.subdivisions, 0.01 / double(opt.sample_count));
     std::vector<double> observed(cells.size(), 0.0);
     Rng rng(opt.seed, 0);
     size_t valid = 0, invalid = 0, mismatches = 0;
