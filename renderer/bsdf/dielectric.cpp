@@ -32,7 +32,16 @@ RoughEval eval_rough(const DielectricBsdf& b, const Vec3& wo, const Vec3& wi, Tr
     // Microfacets seen from the back by either direction contribute nothing.
     if (dot_o * cos_o <= 0 || dot_i * cos_i <= 0) return out;
     Microfacet md = distribution(b);
-    float r = fresnel_dielectric(dot_o, b.eta).r;
+    // Across a refraction, evaluate Fresnel from the optically thinner side: seen from the denser
+    // side, 1 - F has an infinite slope at the critical angle and float round-off is amplified.
+    // Both orders of (wo, wi) then also get bit-identical F.
+    float r;
+    if (reflect) {
+        r = fresnel_dielectric(dot_o, b.eta).r;
+    } else {
+        bool wo_thin = (cos_o > 0) == (b.eta >= 1.f);
+        r = fresnel_dielectric(wo_thin ? dot_o : dot_i, b.eta).r;
+    }
     if (reflect) {
         if (want_f) {
             float v = md.D(m) * md.G(wo, wi, m) * r / (4.f * std::abs(cos_o * cos_i));
