@@ -1,5 +1,5 @@
 #pragma once
-// Tabulated complex IOR of common metals, reduced to RGB, for `material: Au|Ag|Cu|Al`.
+// Complex indices of refraction of common metals, reduced to RGB.
 #include <optional>
 #include <string_view>
 #include <utility>
@@ -8,7 +8,7 @@
 
 namespace omega {
 
-// Returns (eta, k) for a metal name such as "Au", or nullopt if the name is unknown.
+// Returns (eta, k) for "Au", "Ag", "Cu", "Al" (case-sensitive, Mitsuba's names), or nullopt.
 std::optional<std::pair<Rgb, Rgb>> named_metal_ior(std::string_view name);
 
 }  // namespace omega

@@ -1,0 +1,61 @@
+#include "bsdf/bsdf.h"
+
+#include <type_traits>
+
+#include "bsdf/models.h"
+
+namespace omega {
+
+Rgb bsdf_eval(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode) {
+    return std::visit(
+        [&](const auto& m) -> Rgb {
+            using T = std::decay_t<decltype(m)>;
+            if constexpr (std::is_same_v<T, BlackBsdf>) return Rgb(0.f);
+            else if constexpr (std::is_same_v<T, DielectricBsdf>) return eval(m, wo, wi, mode);
+            else return eval(m, wo, wi);
+        },
+        b);
+}
+
+float bsdf_pdf_sa(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode) {
+    return std::visit(
+        [&](const auto& m) -> float {
+            using T = std::decay_t<decltype(m)>;
+            if constexpr (std::is_same_v<T, BlackBsdf>) return 0.f;
+            else if constexpr (std::is_same_v<T, DielectricBsdf>) return pdf_sa(m, wo, wi, mode);
+            else return pdf_sa(m, wo, wi);
+        },
+        b);
+}
+
+std::optional<BsdfSample> bsdf_sample(const Bsdf& b, const Vec3& wo, float uc, Vec2 u, TransportMode mode) {
+    return std::visit(
+        [&](const auto& m) -> std::optional<BsdfSample> {
+            using T = std::decay_t<decltype(m)>;
+            if constexpr (std::is_same_v<T, BlackBsdf>) return std::nullopt;
+            else if constexpr (std::is_same_v<T, DielectricBsdf>) return sample(m, wo, uc, u, mode);
+            else return sample(m, wo, u);
+        },
+        b);
+}
+
+uint8_t bsdf_lobes(const Bsdf& b) {
+    return std::visit(
+        [](const auto& m) -> uint8_t {
+            using T = std::decay_t<decltype(m)>;
+            if constexpr (std::is_same_v<T, BlackBsdf>) {
+                return kLobeNone;
+            } else if constexpr (std::is_same_v<T, DiffuseBsdf>) {
+                return kLobeReflection | kLobeDiffuse;
+            } else if constexpr (std::is_same_v<T, ConductorBsdf>) {
+                bool smooth = m.alpha_u == 0 && m.alpha_v == 0;
+                return kLobeReflection | (smooth ? kLobeDelta : kLobeGlossy);
+            } else {
+                bool smooth = m.alpha_u == 0 && m.alpha_v == 0;
+                return kLobeReflection | kLobeTransmission | (smooth ? kLobeDelta : kLobeGlossy);
+            }
+        },
+        b);
+}
+
+}  // namespace omega

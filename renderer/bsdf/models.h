@@ -1,0 +1,19 @@
+#pragma once
+// Per-model entry points behind the std::variant dispatch in bsdf.cpp.
+#include "bsdf/bsdf.h"
+
+namespace omega {
+
+Rgb eval(const DiffuseBsdf& b, const Vec3& wo, const Vec3& wi);
+float pdf_sa(const DiffuseBsdf& b, const Vec3& wo, const Vec3& wi);
+std::optional<BsdfSample> sample(const DiffuseBsdf& b, const Vec3& wo, Vec2 u);
+
+Rgb eval(const ConductorBsdf& b, const Vec3& wo, const Vec3& wi);
+float pdf_sa(const ConductorBsdf& b, const Vec3& wo, const Vec3& wi);
+std::optional<BsdfSample> sample(const ConductorBsdf& b, const Vec3& wo, Vec2 u);
+
+Rgb eval(const DielectricBsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
+float pdf_sa(const DielectricBsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
+std::optional<BsdfSample> sample(const DielectricBsdf& b, const Vec3& wo, float uc, Vec2 u, TransportMode mode);
+
+}  // namespace omega

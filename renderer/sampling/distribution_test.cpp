@@ -1,0 +1,74 @@
+#include "sampling/distribution.h"
+
+#include <gtest/gtest.h>
+
+#include "chi2.h"
+#include "sampling/rng.h"
+
+namespace omega {
+namespace {
+
+TEST(DiscreteDistribution, ChiSquareOverItems) {
+    // Includes zero weights (must never be drawn) and a tiny one (pooled by the harness).
+    std::vector<double> w = {1, 0, 3, 0.5, 7, 0, 2, 1e-4, 4, 0.25};
+    DiscreteDistribution d(w);
+    const size_t n = 1'000'000;
+    std::vector<double> observed(w.size(), 0.0), expected(w.size());
+    double total = 0;
+    for (double x : w) total += x;
+    for (size_t i = 0; i < w.size(); ++i) expected[i] = w[i] / total * double(n);
+    Rng rng(3, 0);
+    for (size_t s = 0; s < n; ++s) {
+        float u_remapped = -1;
+        size_t i = d.sample(rng.next_1d(), &u_remapped);
+        ASSERT_LT(i, w.size());
+        ASSERT_GE(u_remapped, 0.f);
+        ASSERT_LT(u_remapped, 1.f);
+        observed[i] += 1;
+    }
+    test::Chi2Result r = test::chi2_from_counts(observed, expected, 0.01, 2);
+    test::print_result("DiscreteDistribution", r);
+    EXPECT_TRUE(r.passed) << r.message;
+    EXPECT_EQ(observed[1], 0);
+    EXPECT_EQ(observed[5], 0);
+    for (size_t i = 0; i < w.size(); ++i) EXPECT_NEAR(d.pmf(i), w[i] / total, 1e-7);
+}
+
+TEST(DiscreteDistribution, RemappedUIsUniform) {
+    // The rescaled u is reused by callers; it must be uniform within the chosen item.
+    DiscreteDistribution d({1, 2, 3});
+    const size_t n = 200'000;
+    const int bins = 50;
+    std::vector<double> observed(bins, 0.0), expected(bins, double(n) / bins);
+    Rng rng(5, 0);
+    for (size_t s = 0; s < n; ++s) {
+        float u2;
+        d.sample(rng.next_1d(), &u2);
+        observed[std::min(bins - 1, int(u2 * bins))] += 1;
+    }
+    test::Chi2Result r = test::chi2_from_counts(observed, expected, 0.01, 2);
+    test::print_result("DiscreteDistribution remapped u", r);
+    EXPECT_TRUE(r.passed) << r.message;
+}
+
+TEST(DiscreteDistribution, HarnessRejectsWrongPmf) {
+    std::vector<double> w = {1, 2, 3, 4};
+    DiscreteDistribution d(w);
+    std::vector<double> observed(4, 0.0);
+    Rng rng(9, 0);
+    for (size_t s = 0; s < 200'000; ++s) observed[d.sample(rng.next_1d())] += 1;
+    // Claim item 0 is 10% likelier than it is (renormalised).
+    std::vector<double> expected = {1.1, 2, 3, 4};
+    for (double& e : expected) e *= 200'000 / 10.1;
+    EXPECT_FALSE(test::chi2_from_counts(observed, expected, 0.01, 1).passed);
+}
+
+TEST(DiscreteDistribution, DegenerateInputs) {
+    EXPECT_TRUE(DiscreteDistribution(std::vector<double>{}).empty());
+    EXPECT_TRUE(DiscreteDistribution({0.0, 0.0}).empty());
+    DiscreteDistribution one({0.0, 5.0, 0.0});
+    for (float u : {0.f, 0.3f, 0.999999f}) EXPECT_EQ(one.sample(u), 1u);
+}
+
+}  // namespace
+}  // namespace omega
