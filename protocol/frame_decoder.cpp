@@ -105,25 +105,25 @@ void FrameDecoder::prelude_complete() {
 }
 
 void FrameDecoder::header_complete() {
-  Result<ParsedHeader, FrameError> r = fail(FrameError::header_not_yaml, "");
   try {
-    r = parse_header(header_);
+    auto r = parse_header(header_);
+    if (!r) {
+      set_error(r.code(), r.message());
+      return;
+    }
+    parsed_.emplace(r.value());
   } catch (const std::exception& e) {
     set_error(FrameError::header_not_yaml, std::string("header is not valid YAML: ") + e.what());
     return;
   }
-  if (!r) {
-    set_error(r.code(), r.message());
-    return;
-  }
-  parsed_ = std::move(r).value();
-  std::uint64_t limit = limits_.payload_limit(parsed_.type);
+  std::uint64_t limit = limits_.payload_limit(parsed_->type);
   if (payload_len_ > limit) {
     set_error(FrameError::payload_too_large_for_type,
-              std::string(to_string(parsed_.type)) + " frame with a payload of " +
+              std::string(to_string(parsed_->type)) + " frame with a payload of " +
                   std::to_string(payload_len_) + " bytes exceeds its limit of " + std::to_string(limit));
     return;
   }
+  header_ = std::string();
   payload_.clear();
   payload_.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(payload_len_, kPayloadChunk)));
   stage_ = Stage::payload;
@@ -131,9 +131,8 @@ void FrameDecoder::header_complete() {
 }
 
 void FrameDecoder::payload_complete() {
-  ready_.push_back(DecodedFrame{parsed_.type, parsed_.id, std::move(parsed_.header), std::move(payload_)});
-  parsed_ = ParsedHeader{};
-  header_ = std::string();
+  ready_.emplace_back(parsed_->type, parsed_->id, parsed_->header, std::move(payload_));
+  parsed_.reset();
   payload_ = std::string();
   prelude_len_ = 0;
   stage_ = Stage::prelude;

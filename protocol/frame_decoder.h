@@ -67,7 +67,7 @@ class FrameDecoder {
   std::uint32_t header_len_ = 0;
   std::uint64_t payload_len_ = 0;
   std::string header_;
-  ParsedHeader parsed_;
+  std::optional<ParsedHeader> parsed_;
   std::string payload_;
   std::deque<DecodedFrame> ready_;
   std::optional<Failure<FrameError>> error_;

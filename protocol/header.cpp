@@ -83,7 +83,7 @@ Result<ParsedHeader, FrameError> parse_header(std::string_view text) {
   if (!is_valid_utf8(text)) return fail(FrameError::header_not_utf8, "header is not valid UTF-8");
   YAML::Node root;
   try {
-    root = YAML::Load(std::string(text));
+    root.reset(YAML::Load(std::string(text)));
   } catch (const std::exception& e) {
     return fail(FrameError::header_not_yaml, std::string("header is not valid YAML: ") + e.what());
   }
@@ -244,11 +244,8 @@ std::string FieldReader::str(std::string_view key, std::size_t max_len) {
 
 FieldReader FieldReader::map(std::string_view key, bool required) {
   YAML::Node n = get(key, required);
-  if (n.IsDefined() && !n.IsMap()) {
-    fail(DecodeError::wrong_type, path_of(key), "expected a mapping");
-    n = YAML::Node(YAML::NodeType::Undefined);
-  }
-  return FieldReader(n.IsDefined() ? n : YAML::Node(YAML::NodeType::Map), path_of(key), err_);
+  if (n.IsDefined() && !n.IsMap()) fail(DecodeError::wrong_type, path_of(key), "expected a mapping");
+  return FieldReader(n.IsMap() ? n : YAML::Node(YAML::NodeType::Map), path_of(key), err_);
 }
 
 std::vector<FieldReader> FieldReader::map_list(std::string_view key, std::size_t max_items) {

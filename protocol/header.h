@@ -19,17 +19,55 @@ namespace omega::protocol {
 
 // A frame whose header has passed the framing checks: valid UTF-8, a YAML mapping without
 // duplicate keys, a known `type` and a decimal `id`.
+//
+// YAML::Node assignment writes through to every node sharing the target, so these types rebind
+// with reset() instead; assigning one frame to another never alters a third.
+struct ParsedHeader {
+  MessageType type{};
+  std::uint64_t id = 0;
+  YAML::Node header;
+
+  ParsedHeader() = default;
+  ParsedHeader(MessageType t, std::uint64_t i, const YAML::Node& h) : type(t), id(i), header(h) {}
+  ParsedHeader(const ParsedHeader&) = default;
+  ParsedHeader& operator=(const ParsedHeader& o) {
+    type = o.type;
+    id = o.id;
+    header.reset(o.header);
+    return *this;
+  }
+};
+
 struct DecodedFrame {
   MessageType type{};
   std::uint64_t id = 0;
   YAML::Node header;
   std::string payload;
-};
 
-struct ParsedHeader {
-  MessageType type{};
-  std::uint64_t id = 0;
-  YAML::Node header;
+  DecodedFrame() = default;
+  DecodedFrame(MessageType t, std::uint64_t i, const YAML::Node& h, std::string p)
+      : type(t), id(i), header(h), payload(std::move(p)) {}
+  DecodedFrame(const DecodedFrame&) = default;
+  DecodedFrame(DecodedFrame&& o) noexcept
+      : type(o.type), id(o.id), header(o.header), payload(std::move(o.payload)) {}
+  DecodedFrame& operator=(const DecodedFrame& o) {
+    if (this != &o) {
+      type = o.type;
+      id = o.id;
+      header.reset(o.header);
+      payload = o.payload;
+    }
+    return *this;
+  }
+  DecodedFrame& operator=(DecodedFrame&& o) noexcept {
+    if (this != &o) {
+      type = o.type;
+      id = o.id;
+      header.reset(o.header);
+      payload = std::move(o.payload);
+    }
+    return *this;
+  }
 };
 
 Result<ParsedHeader, FrameError> parse_header(std::string_view text);
