@@ -226,7 +226,7 @@ TEST(FrameDecoder, FuzzedMutationsNeverCrashOrThrow) {
         case 0: s[pos] = static_cast<char>(rng()); break;                 // overwrite
         case 1: s[pos] = static_cast<char>(s[pos] ^ (1 << (rng() % 8))); break;  // bit flip
         case 2: s.erase(pos, 1 + rng() % 16); break;                      // delete
-        default: s.insert(pos, std::string(1 + rng() % 8, static_cast<char>(rng()))); break;
+        default: s.insert(pos, 1 + rng() % 8, static_cast<char>(rng())); break;
       }
       if (s.empty()) s = "x";
     }
