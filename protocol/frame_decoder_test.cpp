@@ -228,7 +228,7 @@ TEST(FrameDecoder, FuzzedMutationsNeverCrashOrThrow) {
         case 2: s.erase(pos, 1 + rng() % 16); break;                      // delete
         default: s.insert(pos, 1 + rng() % 8, static_cast<char>(rng())); break;
       }
-      if (s.empty()) s = "x";
+      if (s.empty()) s.assign(1, 'x');
     }
     FrameDecoder d(lim);
     std::string_view rest = s;
