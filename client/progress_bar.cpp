@@ -18,9 +18,14 @@ void ProgressBar::update(double fraction, const std::string& status) {
     std::string bar;
     if (fraction >= 0) {
         int filled = int(std::clamp(fraction, 0.0, 1.0) * kWidth + 0.5);
-        bar = "[" + std::string(size_t(filled), '#') + std::string(size_t(kWidth - filled), '.') + "] ";
+        bar.reserve(kWidth + 3);
+        bar.push_back('[');
+        bar.append(size_t(filled), '#');
+        bar.append(size_t(kWidth - filled), '.');
+        bar.append("] ");
     }
-    std::string line = bar + status;
+    std::string line = std::move(bar);
+    line.append(status);
     size_t pad = last_len_ > line.size() ? last_len_ - line.size() : 0;
     std::fprintf(out_, "\r%s%s", line.c_str(), std::string(pad, ' ').c_str());
     std::fflush(out_);

@@ -275,7 +275,7 @@ TEST(BsdfProperties, NoNanOrInfAnywhere) {
             float uc = i < 64 ? us[(i / 16) % 4] : rng.next_1d();
             for (TransportMode mode : {kRad, kImp}) {
                 auto s = bsdf_sample(m.bsdf, wo, uc, u, mode);
-                if (wo.z == 0) ASSERT_FALSE(s) << m.name;
+                if (wo.z == 0) { ASSERT_FALSE(s) << m.name; }
                 if (s) {
                     ASSERT_TRUE(is_finite(s->weight) && is_finite(s->wi)) << m.name;
                     ASSERT_TRUE(s->pdf_sa > 0 && std::isfinite(s->pdf_sa)) << m.name;

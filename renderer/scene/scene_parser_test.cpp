@@ -14,13 +14,6 @@ using omega::test::scene_error_of;
 using omega::test::source_root;
 using omega::test::TempDir;
 
-// Stand-in until bsdf/metals.cpp lands; weak so the real definition wins when it exists.
-namespace omega {
-__attribute__((weak)) std::optional<std::pair<Rgb, Rgb>> named_metal_ior(std::string_view name) {
-    if (name == "Au") return std::pair{Rgb{0.143f, 0.374f, 1.442f}, Rgb{3.983f, 2.385f, 1.603f}};
-    return std::nullopt;
-}
-}  // namespace omega
 
 namespace {
 

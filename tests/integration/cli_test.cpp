@@ -14,14 +14,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
+struct CmdResult {
     int code = -1;
     std::string output;  // stdout and stderr
 };
 
-Run run(const std::string& args) {
+CmdResult run(const std::string& args) {
     std::string cmd = std::string(OMEGA_BIN) + " " + args + " 2>&1";
-    Run r;
+    CmdResult r;
     FILE* p = popen(cmd.c_str(), "r");
     if (!p) return r;
     std::array<char, 4096> buf;
@@ -67,7 +67,7 @@ lights:
 TEST_F(CliTest, RendersAndWritesHeader) {
     std::string scene = write("good.yaml", kGood);
     std::string out = (dir_ / "out.exr").string();
-    Run r = run("render " + scene + " -o " + out + " --spp 3 --seed 9 --threads 2");
+    CmdResult r = run("render " + scene + " -o " + out + " --spp 3 --seed 9 --threads 2");
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_NE(r.output.find("samples/s"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("rays/s"), std::string::npos) << r.output;
@@ -121,7 +121,7 @@ TEST_F(CliTest, BadScenesExitWithCodeTwoAndNameTheProblem) {
     };
     for (const auto& c : cases) {
         std::string scene = write("bad.yaml", c.text);
-        Run r = run("render " + scene + " -o " + (dir_ / "bad.exr").string() + " --spp 1");
+        CmdResult r = run("render " + scene + " -o " + (dir_ / "bad.exr").string() + " --spp 1");
         EXPECT_EQ(r.code, 2) << c.name << ": " << r.output;
         EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.name << ": " << r.output;
         // file:line: is always there

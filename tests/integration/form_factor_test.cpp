@@ -23,14 +23,14 @@ double rect_ff(double px, double py, double x0, double x1, double y0, double y1,
     return corner_ff(x1, y1, h) - corner_ff(x0, y1, h) - corner_ff(x1, y0, h) + corner_ff(x0, y0, h);
 }
 
-struct Setup {
+struct FfSetup {
     double lx0 = 0.5, lx1 = 1.5, ly0 = -0.5, ly1 = 0.5, h = 1.0;  // the light
     double cx = -0.5, cy = 0.0, half = 0.75;                       // the viewed square
     float rho = 0.8f, le = 4.f;
     int res = 24;
 };
 
-SceneDesc make_scene(const Setup& s, FilterType filter) {
+SceneDesc make_scene(const FfSetup& s, FilterType filter) {
     SceneDesc d = test::empty_scene(s.res, s.res);
     d.integrator.max_depth = 2;
     d.sensor.type = SensorType::Orthographic;
@@ -55,7 +55,7 @@ SceneDesc make_scene(const Setup& s, FilterType filter) {
 }
 
 // Expected pixel value: the box-filtered radiance, integrated over the pixel by Gauss-Legendre.
-double expected_pixel(const Setup& s, int x, int y) {
+double expected_pixel(const FfSetup& s, int x, int y) {
     static const double g[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
     static const double w[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
     double sum = 0;
@@ -71,7 +71,7 @@ double expected_pixel(const Setup& s, int x, int y) {
 }
 
 TEST(FormFactor, PlaneUnderRectangularLight) {
-    Setup s;
+    FfSetup s;
     auto r = test::render(make_scene(s, FilterType::Box), 64, 7);
     auto z = test::z_against(r.film(), [&](int x, int y) { return expected_pixel(s, x, y); });
     double bound = test::z_threshold(1);
@@ -82,7 +82,7 @@ TEST(FormFactor, PlaneUnderRectangularLight) {
 }
 
 TEST(FormFactor, DetectsAWrongAnswer) {
-    Setup s;
+    FfSetup s;
     auto r = test::render(make_scene(s, FilterType::Box), 64, 8);
     auto z = test::z_against(r.film(), [&](int x, int y) { return 1.03 * expected_pixel(s, x, y); });
     EXPECT_GT(std::abs(z.z), test::z_threshold(1));
