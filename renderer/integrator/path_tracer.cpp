@@ -97,10 +97,15 @@ Rgb PathTracer::radiance(Ray ray, Rng& rng, TracerStats& stats) const {
         if (bs->lobe & kLobeTransmission) eta_scale *= sqr(bs->eta);
 
         if (k >= settings_.rr_depth) {
-            // Survive in proportion to throughput (without the eta^2 radiance scaling).
-            float q = std::min(0.95f, max_component(beta) * eta_scale);
-            if (!(q > 0) || rng.next_1d() >= q) break;
-            beta /= q;
+            // Survive with probability equal to the throughput (without the eta^2 radiance
+            // scaling), so the weight after survival stays at 1. Capping survival below 1 (as
+            // pbrt-v3 did) gives infinite variance in high-albedo scenes: E[beta^2] grows as
+            // (rho^2/q)^k.
+            float q = std::min(1.f, max_component(beta) * eta_scale);
+            if (q < 1.f) {
+                if (!(q > 0) || rng.next_1d() >= q) break;
+                beta /= q;
+            }
         }
         ray = spawn_ray(hit, wi);
     }

@@ -21,6 +21,11 @@ float spot_falloff(const SpotLight& s, const Vec3& w_local) {
     return std::clamp((s.cutoff_rad - angle) / (s.cutoff_rad - s.beam_rad), 0.f, 1.f);
 }
 
+// Reference points on or inside the sphere sample its area: cone sampling is only valid from
+// strictly outside. The relative margin keeps points on the surface (whose computed distance
+// may round either way) on the area side; area sampling is unbiased from anywhere.
+bool sphere_area_sampling(double dc2, double r) { return dc2 <= r * r * (1.0 + 1e-4); }
+
 struct SpherePoint {
     Vec3 p, n;
     float pdf_sa;
@@ -32,7 +37,7 @@ std::optional<SpherePoint> sample_sphere(const SphereData& s, const Vec3& ref, V
     Vec3d c = s.center, pr(ref);
     double r = s.radius;
     double dc2 = length_sq(pr - c);
-    if (dc2 <= r * r) {
+    if (sphere_area_sampling(dc2, r)) {
         Vec3 n = square_to_uniform_sphere(u);
         Vec3d pd = c + Vec3d(n) * r;
         Vec3 p(pd);
@@ -71,7 +76,7 @@ float sphere_pdf_sa(const SphereData& s, const Vec3& ref, const SurfaceHit& hit)
     Vec3d c = s.center, pr(ref);
     double r = s.radius;
     double dc2 = length_sq(pr - c);
-    if (dc2 <= r * r) {
+    if (sphere_area_sampling(dc2, r)) {
         Vec3 d = hit.p - ref;
         float dist2 = length_sq(d);
         return convert_area_to_sa(float(1.0 / (4.0 * kPiD * r * r)), dist2, absdot(hit.ng, d / std::sqrt(dist2)));

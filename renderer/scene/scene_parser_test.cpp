@@ -150,7 +150,7 @@ lights:
     EXPECT_EQ(d.materials.at("white").loc.key, "materials.white");
     auto& gold = std::get<ConductorBsdf>(d.materials.at("gold").bsdf);
     EXPECT_TRUE(gold.has_ior);
-    EXPECT_FLOAT_EQ(gold.eta.x, 0.143f);
+    EXPECT_EQ(gold.eta, named_metal_ior("Au")->first);
     EXPECT_FLOAT_EQ(gold.alpha_u, 0.1f);
     EXPECT_FLOAT_EQ(gold.alpha_v, 0.2f);
     EXPECT_EQ(gold.distribution, MicrofacetType::Beckmann);

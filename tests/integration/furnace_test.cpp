@@ -46,7 +46,7 @@ class Furnace : public ::testing::TestWithParam<float> {};
 TEST_P(Furnace, UnboundedDepthMatchesGeometricSeries) {
     float rho = GetParam();
     const float le = 0.5f;
-    auto r = test::render(furnace(rho, le, -1), rho > 0.95f ? 24 : 16, 1);
+    auto r = test::render(furnace(rho, le, -1), rho > 0.95f ? 64 : 32, 1);
     double expected = le / (1.0 - rho);
     double z = z_with_slack(r.film(), expected);
     EXPECT_LT(z, test::z_threshold(6)) << "rho " << rho << " mean " << r.report.error.image_mean << " expected " << expected;
@@ -70,8 +70,8 @@ INSTANTIATE_TEST_SUITE_P(Albedo, Furnace, ::testing::Values(0.5f, 0.9f, 0.99f));
 
 // The test must be able to fail: a wrong albedo in the expectation is rejected.
 TEST(FurnaceSanity, DetectsAWrongAnswer) {
-    auto r = test::render(furnace(0.9f, 0.5f, -1), 16, 3);
-    double wrong = 0.5 / (1.0 - 0.9) * 1.02;
+    auto r = test::render(furnace(0.9f, 0.5f, -1), 64, 3);
+    double wrong = 0.5 / (1.0 - 0.9) * 1.03;
     EXPECT_GT(z_with_slack(r.film(), wrong), test::z_threshold(1));
 }
 
