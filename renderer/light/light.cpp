@@ -115,8 +115,7 @@ std::optional<LightSample> light_sample_li(const Scene& scene, const Light& ligh
             float b2 = std::max(0.f, 1.f - b.x - b.y);
             ls.p = p0 * b.x + p1 * b.y + p2 * b2;
             ls.p_error = (abs(p0 * b.x) + abs(p1 * b.y) + abs(p2 * b2)) * gamma_bound(6);
-            Vec3 n = normalize(cross(p1 - p0, p2 - p0));
-            ls.n = sh.flip_normals ? -n : n;
+            ls.n = sh.face_normals[t];
             Vec3 d = ls.p - ref;
             float dist2 = length_sq(d);
             if (dist2 == 0) return std::nullopt;

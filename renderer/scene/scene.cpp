@@ -25,11 +25,11 @@ void reject_self_hit(const RTCFilterFunctionNArguments* args) {
     }
 }
 
-void init_context(QueryContext& qc, const Ray& ray) {
+void init_context(QueryContext& qc, const Ray& ray, bool filter_self) {
     rtcInitIntersectContext(&qc.ctx);
     qc.geom = ray.origin_geom;
     qc.prim = ray.origin_prim;
-    if (ray.origin_geom != kNoPrimitive) qc.ctx.filter = reject_self_hit;
+    if (filter_self && ray.origin_geom != kNoPrimitive) qc.ctx.filter = reject_self_hit;
 }
 
 void fill_ray(RTCRay& r, const Ray& ray) {
@@ -52,12 +52,21 @@ Scene::~Scene() {
 
 bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
     QueryContext qc;
-    init_context(qc, ray);
+    init_context(qc, ray, false);
     RTCRayHit rh;
     fill_ray(rh.ray, ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(rtc_, &qc.ctx, &rh);
+    if (rh.hit.geomID == ray.origin_geom && rh.hit.primID == ray.origin_prim) {
+        // A rounding-error hit on the planar primitive the ray leaves (about 1 ray in 1e6):
+        // trace again with the filter, which is too costly to run on every closest-hit query.
+        init_context(qc, ray, true);
+        fill_ray(rh.ray, ray);
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(rtc_, &qc.ctx, &rh);
+    }
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
     const Shape& sh = shapes_[rh.hit.geomID];
@@ -85,8 +94,7 @@ bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
         // Barycentric interpolation, with its bound (pbrt-v4 eq. 6.x: gamma_7 * sum |b_i p_i|).
         hit.p = p0 * b0 + p1 * b1 + p2 * b2;
         hit.p_error = (abs(p0 * b0) + abs(p1 * b1) + abs(p2 * b2)) * gamma_bound(7);
-        Vec3 ng = normalize(cross(p1 - p0, p2 - p0));
-        if (sh.flip_normals) ng = -ng;
+        Vec3 ng = sh.face_normals[hit.prim];
         if (!m.normals.empty()) {
             Vec3 ns = m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2;
             float len = length(ns);
@@ -109,7 +117,7 @@ bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
 
 bool Scene::occluded(const Ray& ray) const {
     QueryContext qc;
-    init_context(qc, ray);
+    init_context(qc, ray, true);
     RTCRay r;
     fill_ray(r, ray);
     rtcOccluded1(rtc_, &qc.ctx, &r);

@@ -26,8 +26,9 @@ struct Shape {
     ShapeKind kind = ShapeKind::Triangles;
     uint32_t material = 0;  // index into Scene::materials()
     int32_t light = -1;     // its area light, or -1
-    bool flip_normals = false;
+    bool flip_normals = false;      // spheres only: triangle meshes are baked flipped
     TriangleMesh mesh;      // world space (triangles)
+    std::vector<Vec3> face_normals;  // unit geometric normal per triangle (from the baked winding)
     SphereData sphere;      // world space (sphere); Embree keeps a pointer to it
     double area = 0;                     // world-space surface area
     DiscreteDistribution tri_by_area;    // triangles, for uniform area sampling

@@ -95,7 +95,15 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
             if (!tf) throw SceneError(fmt::format("{}: {}.to_world: matrix is singular", where(sd.loc), sh.name));
             bake_mesh(sh.mesh, *tf, sd.flip_normals, sd.drop_degenerate, sd.loc, sh.name);
             std::vector<double> areas(sh.mesh.triangle_count());
-            for (size_t t = 0; t < areas.size(); ++t) areas[t] = triangle_area(sh.mesh, t);
+            sh.face_normals.resize(areas.size());
+            for (size_t t = 0; t < areas.size(); ++t) {
+                areas[t] = triangle_area(sh.mesh, t);
+                const auto& m = sh.mesh;
+                Vec3d p0(m.positions[m.indices[3 * t]]), p1(m.positions[m.indices[3 * t + 1]]),
+                    p2(m.positions[m.indices[3 * t + 2]]);
+                Vec3 n(normalize(cross(p1 - p0, p2 - p0)));
+                sh.face_normals[t] = n;  // bake_mesh already reversed the winding for flip_normals
+            }
             sh.tri_by_area = DiscreteDistribution(areas);
             sh.area = sh.tri_by_area.total();
             if (sh.mesh.triangle_count() == 0)

@@ -31,6 +31,8 @@ inline Vec2 film_to_plane(Vec2 film, int w, int h, float ex, float ey) {
 Sensor Sensor::from_desc(const SensorDesc& d) {
     Sensor s;
     s.to_world = *Transform::make(d.to_world);  // the parser rejects singular matrices
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) s.m[r * 4 + c] = float(d.to_world(r, c));
     s.width = d.film.width;
     s.height = d.film.height;
     s.near_clip = d.near_clip;
@@ -49,31 +51,35 @@ Sensor Sensor::from_desc(const SensorDesc& d) {
 }
 
 Ray Sensor::generate_ray(Vec2 film, Vec2 u_lens) const {
-    Vec3d o_local, d_local;
+    Vec3 o_local, d_local;
     if (auto* p = std::get_if<PerspectiveSensor>(&model)) {
         Vec2 q = film_to_plane(film, width, height, p->tan_half_x, p->tan_half_y);
-        o_local = {0, 0, 0};
-        d_local = {q.x, q.y, 1.0};
+        d_local = {q.x, q.y, 1.f};
     } else if (auto* tl = std::get_if<ThinLensSensor>(&model)) {
         Vec2 q = film_to_plane(film, width, height, tl->tan_half_x, tl->tan_half_y);
         Vec2 lens = square_to_uniform_disk_concentric(u_lens);
-        Vec3d focus{double(q.x) * tl->focus_distance, double(q.y) * tl->focus_distance, tl->focus_distance};
-        o_local = {double(lens.x) * tl->aperture_radius, double(lens.y) * tl->aperture_radius, 0};
+        Vec3 focus{q.x * tl->focus_distance, q.y * tl->focus_distance, tl->focus_distance};
+        o_local = {lens.x * tl->aperture_radius, lens.y * tl->aperture_radius, 0.f};
         d_local = focus - o_local;
     } else {
         auto& o = std::get<OrthographicSensor>(model);
         Vec2 q = film_to_plane(film, width, height, o.half_x, o.half_y);
-        o_local = {q.x, q.y, 0};
-        d_local = {0, 0, 1};
+        o_local = {q.x, q.y, 0.f};
+        d_local = {0.f, 0.f, 1.f};
     }
-    Vec3d local_dir = normalize(d_local);
-    Vec3d o = to_world.point(o_local);
-    Vec3d d = normalize(to_world.vector(d_local));
+    Vec3 o{m[0] * o_local.x + m[1] * o_local.y + m[2] * o_local.z + m[3],
+           m[4] * o_local.x + m[5] * o_local.y + m[6] * o_local.z + m[7],
+           m[8] * o_local.x + m[9] * o_local.y + m[10] * o_local.z + m[11]};
+    Vec3 d = normalize(Vec3{m[0] * d_local.x + m[1] * d_local.y + m[2] * d_local.z,
+                            m[4] * d_local.x + m[5] * d_local.y + m[6] * d_local.z,
+                            m[8] * d_local.x + m[9] * d_local.y + m[10] * d_local.z});
     Ray r;
-    // near_clip is a distance along the optical axis.
-    double t0 = near_clip > 0 ? near_clip / local_dir.z : 0.0;
-    r.o = Vec3(o + d * t0);
-    r.d = Vec3(d);
+    r.o = o;
+    r.d = d;
+    if (near_clip > 0) {
+        // near_clip is a distance along the optical axis (local z).
+        r.o += d * (near_clip * length(d_local) / d_local.z);
+    }
     return r;
 }
 

@@ -23,6 +23,7 @@ struct OrthographicSensor {
 struct Sensor {
     std::variant<PerspectiveSensor, ThinLensSensor, OrthographicSensor> model;
     Transform to_world;
+    float m[12] = {};  // to_world's top 3x4 rows in float, for the per-sample ray
     int width = 1, height = 1;
     float near_clip = 0;
 

@@ -90,3 +90,24 @@ TEST(FormFactor, DetectsAWrongAnswer) {
 
 }  // namespace
 }  // namespace omega
+
+namespace omega {
+namespace {
+
+// flip_normals turns a one-sided emitter around: a rectangle facing up, flipped, must light the
+// floor exactly like the rotated one above (and a double flip would leave the floor dark).
+TEST(FormFactor, FlipNormalsTurnsTheEmitterAround) {
+    FfSetup s;
+    SceneDesc d = make_scene(s, FilterType::Box);
+    ShapeDesc& light = d.shapes[1];
+    light.to_world = Mat4::translate({0.5 * (s.lx0 + s.lx1), 0.5 * (s.ly0 + s.ly1), s.h}) *
+                     Mat4::scale({0.5 * (s.lx1 - s.lx0), 0.5 * (s.ly1 - s.ly0), 1});
+    light.flip_normals = true;
+    auto r = test::render(d, 64, 9);
+    auto z = test::z_against(r.film(), [&](int x, int y) { return expected_pixel(s, x, y); });
+    EXPECT_LT(std::abs(z.z), test::z_threshold(1)) << "aggregate z " << z.z;
+    EXPECT_GT(r.report.error.image_mean, 0.0);
+}
+
+}  // namespace
+}  // namespace omega
