@@ -55,16 +55,20 @@ size_t Film::index(int x, int y) const {
     return size_t(y - crop_.y0) * size_t(crop_.width()) + size_t(x - crop_.x0);
 }
 
-void Film::add_sample(int x, int y, const Rgb& value) {
+void Film::add_sample(int x, int y, const Rgb& value) { add_weighted(x, y, Vec3d(value), 1.0); }
+
+void Film::add_weighted(int x, int y, const Vec3d& value, double weight) {
     Accum& a = px_[index(x, y)];
-    // Welford: stable where sum/sum-of-squares cancels catastrophically (bright, low-variance pixels).
+    // Weighted Welford (West 1979): stable where sum/sum-of-squares cancels catastrophically
+    // (bright, low-variance pixels). With unit weights it is the classic update.
     a.n += 1;
-    const double inv_n = 1.0 / double(a.n);
+    a.w += weight;
+    const double f = weight / a.w;
     for (int c = 0; c < 3; ++c) {
         const double v = value[c];
         const double delta = v - a.mean[c];
-        a.mean[c] += delta * inv_n;
-        a.m2[c] += delta * (v - a.mean[c]);
+        a.mean[c] += delta * f;
+        a.m2[c] += weight * delta * (v - a.mean[c]);
     }
 }
 
@@ -74,7 +78,9 @@ PixelStats Film::pixel(int x, int y) const {
     s.n = a.n;
     s.mean = {a.mean[0], a.mean[1], a.mean[2]};
     if (a.n >= 2) {
-        const double k = 1.0 / (double(a.n) * double(a.n - 1));
+        // Weighted samples x_b with weights n_b (batch sizes) each estimate the mean with
+        // variance sigma^2/n_b: sigma^2 ~ M2/(B-1), and the mean's variance is sigma^2 / sum n_b.
+        const double k = 1.0 / (a.w * double(a.n - 1));
         s.var_of_mean = {a.m2[0] * k, a.m2[1] * k, a.m2[2] * k};
     }
     return s;
@@ -92,7 +98,7 @@ ErrorEstimate Film::estimate_error(double eps) const {
             unknown = true;
             continue;
         }
-        const double v = (a.m2[0] + a.m2[1] + a.m2[2]) / (3.0 * double(a.n) * double(a.n - 1));
+        const double v = (a.m2[0] + a.m2[1] + a.m2[2]) / (3.0 * a.w * double(a.n - 1));
         sum_var += v;
         sum_rel += std::sqrt(v) / std::max(m, eps);
     }
@@ -122,13 +128,14 @@ void Film::merge(const Film& other) {
             a = b;
             continue;
         }
-        const double na = double(a.n), nb = double(b.n), n = na + nb;
+        const double wa = a.w, wb = b.w, w = wa + wb;
         for (int c = 0; c < 3; ++c) {
             const double delta = b.mean[c] - a.mean[c];
-            a.mean[c] += delta * (nb / n);
-            a.m2[c] += b.m2[c] + delta * delta * (na * nb / n);
+            a.mean[c] += delta * (wb / w);
+            a.m2[c] += b.m2[c] + delta * delta * (wa * wb / w);
         }
         a.n += b.n;
+        a.w = w;
     }
 }
 
@@ -136,7 +143,7 @@ void Film::merge(const Film& other) {
 //
 // Layout, all little-endian:
 //   char[8] "OMGFILM\0" | u32 version | i32 width, height, crop x0, y0, x1, y1 | u64 pixel count
-//   pixel count x { u64 n | f64 mean[3] | f64 m2[3] }   (crop, row-major)
+//   pixel count x { u64 n | f64 weight | f64 mean[3] | f64 m2[3] }   (crop, row-major)
 //   u64 checksum of every byte before it (FNV-1a over little-endian 64-bit words, then the
 //   remaining bytes: word-at-a-time keeps a 1024^2 checkpoint fast)
 // The checksum catches torn or bit-flipped checkpoints that size checks alone would load.
@@ -144,9 +151,9 @@ void Film::merge(const Film& other) {
 namespace {
 
 constexpr char kMagic[8] = {'O', 'M', 'G', 'F', 'I', 'L', 'M', '\0'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;  // 2: per-pixel weight sum (batch means)
 constexpr size_t kHeaderBytes = 8 + 4 + 6 * 4 + 8;
-constexpr size_t kPixelBytes = 8 + 6 * 8;
+constexpr size_t kPixelBytes = 8 + 7 * 8;
 
 uint64_t load_le64(const uint8_t* p) {
     uint64_t v = 0;
@@ -212,6 +219,7 @@ std::vector<uint8_t> Film::serialize() const {
     w.u64(px_.size());
     for (const Accum& a : px_) {
         w.u64(a.n);
+        w.f64(a.w);
         for (double v : a.mean) w.f64(v);
         for (double v : a.m2) w.f64(v);
     }
@@ -240,6 +248,8 @@ Film Film::deserialize(const FilmDesc& desc, std::span<const uint8_t> bytes) {
         corrupt("written for a film of another size or crop");
     for (Accum& a : film.px_) {
         a.n = r.u64();
+        a.w = r.f64();
+        if (!std::isfinite(a.w) || a.w < 0 || (a.n == 0) != (a.w == 0)) corrupt("bad sample weight");
         for (double& v : a.mean) v = r.f64();
         for (double& v : a.m2) v = r.f64();
         for (int k = 0; k < 3; ++k)

@@ -68,6 +68,10 @@ public:
     // where sample_position() put it; outside the crop throws std::out_of_range (as does
     // pixel()). The caller drops non-finite values (and counts them): one would poison the pixel.
     void add_sample(int x, int y, const Rgb& value);
+    // One batch mean (e.g. a pass of a splatting integrator) standing for `weight` samples.
+    // Variance then comes from the spread of batch means: valid where per-sample statistics
+    // are not (light-tracing splats land in pixels without a per-pixel sample count).
+    void add_weighted(int x, int y, const Vec3d& value, double weight);
     PixelStats pixel(int x, int y) const;
     // Pixels with fewer than 2 samples have no variance estimate; while any exists in the crop,
     // mean_rel_error and image_mean_stderr are +inf so that a target-error halt cannot fire.
@@ -89,7 +93,8 @@ private:
     struct alignas(64) Accum {
         double mean[3];
         double m2[3];
-        uint64_t n;
+        uint64_t n;  // samples (or batches) added
+        double w;    // sum of their weights (= n for unit weights)
     };
     static_assert(sizeof(Accum) == 64);
     size_t index(int x, int y) const;
