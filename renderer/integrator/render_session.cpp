@@ -6,6 +6,8 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+
+#include "film/filter.h"
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -34,7 +36,80 @@ int resolve_threads(int threads) {
 RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
     : scene_(scene), settings_(settings), tracer_(scene, tracer_settings(settings.integrator)), film_(scene.desc().sensor.film) {
     if (settings.integrator.type != IntegratorType::Path)
-        throw std::invalid_argument("integrator: only 'path' is available in this build");
+        bdpt_ = std::make_unique<BdptTracer>(scene, settings.integrator);
+}
+
+void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0,
+                                          long long s1) {
+    const Rect crop = film_.crop();
+    const Sensor& sensor = scene_.sensor();
+    const uint64_t width = uint64_t(sensor.width);
+    const double inv_light_paths_per_sample = 1.0 / double(std::max<long long>(1, crop.area()));
+    std::vector<Vec3d> sums(size_t(crop.area()), Vec3d(0.0));
+    auto at = [&](int x, int y) -> Vec3d& { return sums[size_t(y - crop.y0) * size_t(crop.width()) + size_t(x - crop.x0)]; };
+    const Filter& filter = film_.filter();
+    const float r = filter.radius();
+
+    // Tiles run in waves; each wave's splats are merged in tile order, so the sums are the same
+    // for any thread count while memory stays bounded by the wave.
+    const size_t wave = size_t(std::max(16, 4 * arena.max_concurrency()));
+    for (size_t w0 = 0; w0 < tiles.size() && !aborted(); w0 += wave) {
+        const size_t w1 = std::min(tiles.size(), w0 + wave);
+        std::vector<std::vector<Splat>> tile_splats(w1 - w0);
+        arena.execute([&] {
+            tbb::parallel_for(
+                tbb::blocked_range<size_t>(w0, w1, 1),
+                [&](const tbb::blocked_range<size_t>& range) {
+                    TracerStats& st = stats_.local();
+                    BdptScratch& scratch = scratch_.local();
+                    std::vector<Splat>& local = sample_splats_.local();
+                    for (size_t ti = range.begin(); ti != range.end(); ++ti) {
+                        if (aborted()) return;
+                        const Rect& tile = tiles[ti];
+                        auto& out = tile_splats[ti - w0];
+                        for (int y = tile.y0; y < tile.y1; ++y)
+                            for (int x = tile.x0; x < tile.x1; ++x) {
+                                uint64_t pixel = uint64_t(y) * width + uint64_t(x);
+                                for (long long i = s0; i < s1; ++i) {
+                                    Rng rng = Rng::for_sample(settings_.seed, pixel, uint64_t(i));
+                                    Vec2 u_film{rng.next_1d(), rng.next_1d()};
+                                    Vec2 u_lens{rng.next_1d(), rng.next_1d()};
+                                    Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
+                                    local.clear();
+                                    Rgb L = bdpt_->sample(ray, rng, st, scratch, local);
+                                    ++st.samples;
+                                    bool finite = is_finite(L);
+                                    for (const Splat& sp : local) finite = finite && is_finite(sp.value);
+                                    if (!finite) {
+                                        ++st.nonfinite;  // the whole sample is dropped, splats included
+                                        continue;
+                                    }
+                                    at(x, y) += Vec3d(L);
+                                    out.insert(out.end(), local.begin(), local.end());
+                                }
+                            }
+                    }
+                },
+                tbb::simple_partitioner());
+        });
+        if (aborted()) return;
+        for (const auto& list : tile_splats)
+            for (const Splat& sp : list) {
+                const int xa = std::max(crop.x0, int(std::floor(sp.film.x - r - 0.5f))),
+                          xb = std::min(crop.x1 - 1, int(std::ceil(sp.film.x + r - 0.5f)));
+                const int ya = std::max(crop.y0, int(std::floor(sp.film.y - r - 0.5f))),
+                          yb = std::min(crop.y1 - 1, int(std::ceil(sp.film.y + r - 0.5f)));
+                for (int y = ya; y <= yb; ++y)
+                    for (int x = xa; x <= xb; ++x) {
+                        double f = filter.pdf(double(sp.film.x) - (x + 0.5), double(sp.film.y) - (y + 0.5));
+                        if (f > 0) at(x, y) += Vec3d(sp.value) * (f * inv_light_paths_per_sample);
+                    }
+            }
+    }
+    if (aborted()) return;
+    const double n = double(s1 - s0);
+    for (int y = crop.y0; y < crop.y1; ++y)
+        for (int x = crop.x0; x < crop.x1; ++x) film_.add_weighted(x, y, at(x, y) / n, n);
 }
 
 void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats) {
@@ -69,7 +144,7 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
     const long long pixels = film_.crop().area();
 
     tbb::task_arena arena(resolve_threads(settings_.threads));
-    tbb::enumerable_thread_specific<TracerStats> stats;  // cache-aligned per thread
+    auto& stats = stats_;
     const auto t_start = Clock::now();
     auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t_start).count(); };
 
@@ -88,18 +163,22 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
         }
         if (n <= 0) break;
         const long long s1 = s0 + n;
-        arena.execute([&] {
-            tbb::parallel_for(
-                tbb::blocked_range<size_t>(0, tiles.size(), 1),
-                [&](const tbb::blocked_range<size_t>& r) {
-                    TracerStats& st = stats.local();
-                    for (size_t t = r.begin(); t != r.end(); ++t) {
-                        if (aborted()) return;
-                        render_tile(tiles[t], s0, s1, st);
-                    }
-                },
-                tbb::simple_partitioner());
-        });
+        if (bdpt_) {
+            render_pass_splatting(arena, tiles, s0, s1);
+        } else {
+            arena.execute([&] {
+                tbb::parallel_for(
+                    tbb::blocked_range<size_t>(0, tiles.size(), 1),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                        TracerStats& st = stats.local();
+                        for (size_t t = r.begin(); t != r.end(); ++t) {
+                            if (aborted()) return;
+                            render_tile(tiles[t], s0, s1, st);
+                        }
+                    },
+                    tbb::simple_partitioner());
+            });
+        }
         if (aborted()) break;  // a partial pass is not reported as complete
 
         report.pass += 1;
@@ -114,6 +193,8 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
         report.rays = total.rays;
         report.samples = total.samples;
         report.nonfinite = total.nonfinite;
+        report.mis_errors = 0;
+        for (const auto& sc : scratch_) report.mis_errors += sc.connect.bad_weights;
         report.samples_per_s = report.elapsed_s > 0 ? double(total.samples) / report.elapsed_s : 0;
         report.rays_per_s = report.elapsed_s > 0 ? double(total.rays) / report.elapsed_s : 0;
         report.error = film_.estimate_error();

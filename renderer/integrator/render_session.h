@@ -8,7 +8,11 @@
 #include <functional>
 #include <memory>
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/task_arena.h>
+
 #include "film/film.h"
+#include "integrator/bdpt_tracer.h"
 #include "integrator/path_tracer.h"
 #include "scene/scene.h"
 
@@ -30,6 +34,7 @@ struct PassReport {
     double samples_per_s = 0;
     double rays_per_s = 0;
     uint64_t rays = 0, samples = 0, nonfinite = 0;
+    uint64_t mis_errors = 0;  // MIS weights computed as non-finite (contribution dropped)
     ErrorEstimate error;
 };
 
@@ -49,13 +54,21 @@ public:
     Film& film() { return film_; }
     const RenderSettings& settings() const { return settings_; }
 
+    // Strategies of the light and bdpt integrators the scene cannot use; see pathspace/classify.h.
 private:
     void render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats);
+    // Light tracing and BDPT: camera sums and splats of one pass, folded into the film as one
+    // batch mean per pixel (splats have no per-pixel sample count, so variance comes from batches).
+    void render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0, long long s1);
 
     const Scene& scene_;
     RenderSettings settings_;
     PathTracer tracer_;
+    std::unique_ptr<BdptTracer> bdpt_;
     Film film_;
+    tbb::enumerable_thread_specific<TracerStats> stats_;  // cache-aligned per thread
+    tbb::enumerable_thread_specific<BdptScratch> scratch_;
+    tbb::enumerable_thread_specific<std::vector<Splat>> sample_splats_;
     std::atomic<bool> aborted_{false};
 };
 

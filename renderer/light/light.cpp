@@ -183,6 +183,13 @@ float light_pdf_li_sa(const Scene& scene, const AreaLight& light, const Vec3& re
     return convert_area_to_sa(float(1.0 / sh.area), dist2, absdot(hit.ng, d / std::sqrt(dist2)));
 }
 
+Rgb light_emission_towards(const Light& light, const SurfaceHit& at, const Vec3& w) {
+    if (auto* a = std::get_if<AreaLight>(&light)) return area_light_le(*a, at, w) * absdot(at.ng, w);
+    if (auto* p = std::get_if<PointLight>(&light)) return p->intensity;
+    if (auto* s = std::get_if<SpotLight>(&light)) return s->intensity * spot_falloff(*s, s->frame.to_local(w));
+    return Rgb(0.f);
+}
+
 double light_power(const Scene& scene, const Light& light) {
     if (auto* a = std::get_if<AreaLight>(&light))
         return double(average(a->radiance)) * scene.shapes()[a->shape].area * kPiD * (a->two_sided ? 2 : 1);

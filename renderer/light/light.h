@@ -58,6 +58,9 @@ float light_pdf_li_sa(const Scene& scene, const AreaLight& light, const Vec3& re
 inline float environment_pdf_li_sa() { return 0.07957747154594766788f; }  // 1 / 4pi, uniform sphere
 // Radiance leaving an area light at `hit` towards w.
 Rgb area_light_le(const AreaLight& light, const SurfaceHit& hit, const Vec3& w);
+// What a finite light's endpoint at `at` sends along unit direction w: radiance x |cos| for area
+// lights (per unit area and solid angle), intensity for point and spot lights.
+Rgb light_emission_towards(const Light& light, const SurfaceHit& at, const Vec3& w);
 // Emitted power, for choosing lights in proportion to it.
 double light_power(const Scene& scene, const Light& light);
 bool light_is_delta(const Light& light);

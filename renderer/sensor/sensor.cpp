@@ -38,6 +38,20 @@ Sensor Sensor::from_desc(const SensorDesc& d) {
     s.near_clip = d.near_clip;
     float tx, ty;
     tangents(d, tx, ty);
+    const FilmDesc& f = d.film;
+    s.crop = f.has_crop ? Rect2i{f.crop[0], f.crop[1], f.crop[2], f.crop[3]} : Rect2i{0, 0, f.width, f.height};
+    s.crop_pixels = double(s.crop.x1 - s.crop.x0) * double(s.crop.y1 - s.crop.y0);
+    s.filter = f.filter;
+    s.filter_radius = f.filter_radius;
+    s.filter_stddev = f.gaussian_stddev;
+    if (d.type == SensorType::Orthographic) {
+        // World extent of the plane: to_world's x and y axis lengths scale the local [-1,1] x [-1/aspect, 1/aspect].
+        double sx = length(d.to_world.vector({1, 0, 0})), sy = length(d.to_world.vector({0, 1, 0}));
+        double aspect = double(f.width) / double(f.height);
+        s.pixel_area = (2.0 * sx / f.width) * (2.0 * sy / aspect / f.height);
+    } else {
+        s.pixel_area = (2.0 * tx / f.width) * (2.0 * ty / f.height);
+    }
     switch (d.type) {
         case SensorType::Perspective: s.model = PerspectiveSensor{tx, ty}; break;
         case SensorType::ThinLens: s.model = ThinLensSensor{tx, ty, d.aperture_radius, d.focus_distance}; break;

@@ -1,6 +1,7 @@
 #pragma once
 // The closed set of sensors. Local frame (Mitsuba): looks along +z, +y is up, +x is the image's
 // left. Film positions are continuous pixel coordinates with the origin at the top-left.
+#include <optional>
 #include <variant>
 
 #include "math/transform.h"
@@ -8,6 +9,11 @@
 #include "scene/scene_desc.h"
 
 namespace omega {
+
+struct Rect2i {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool contains(Vec2 p) const { return p.x >= float(x0) && p.x < float(x1) && p.y >= float(y0) && p.y < float(y1); }
+};
 
 struct PerspectiveSensor {
     float tan_half_x = 1, tan_half_y = 1;  // image plane at z = 1 spans [-tan, tan]
@@ -27,10 +33,41 @@ struct Sensor {
     int width = 1, height = 1;
     float near_clip = 0;
 
+    // Filled by from_desc for importance (light tracing, MIS): see sensor_importance.cpp.
+    double pixel_area = 1;   // image-plane area of one pixel: at z = 1 (perspective, thin lens) or world units (orthographic)
+    double crop_pixels = 1;  // pixels actually rendered
+    Rect2i crop;
+    FilterType filter = FilterType::Box;
+    float filter_radius = 0.5f, filter_stddev = 0.5f;
+    // Sum over crop pixels of the filter weight at film position p: the fraction of the camera's
+    // sampling density (uniform over the crop) that lands at p. 1 inside, less near the border.
+    double crop_coverage(Vec2 p) const;
+
     static Sensor from_desc(const SensorDesc& d);
     // Camera ray through film position `film` (pixels) using lens sample u_lens; weight is 1
     // because each model is sampled in proportion to its importance.
     Ray generate_ray(Vec2 film, Vec2 u_lens) const;
+    // Camera-side densities used by MIS (and by the camera subpath's first vertex): the sensor
+    // is treated as sampling its whole crop uniformly, so they do not depend on the pixel.
+    // pos: area density of the camera vertex (1 for a pinhole); dir: solid-angle density of the
+    // direction (1 for orthographic). Zero outside the crop or behind the camera.
+    struct Pdf {
+        double pos = 0, dir = 0;
+    };
+    Pdf pdf_we(const Vec3& p_cam, const Vec3& w) const;
+
+    // A camera vertex seen from `ref` (strategy t = 1): where on the film it lands, and the
+    // importance to apply: W_e / pdf of the lens point, per unit film-pixel filter weight.
+    struct Connection {
+        Vec3 p;          // camera vertex (pinhole, lens point, or the orthographic plane point)
+        Vec3 wi;         // unit, from ref towards p
+        float dist = 0;  // |p - ref|
+        Vec2 film;       // film position in pixels
+        double importance = 0;  // multiply by the pixel filter weight f(film - pixel centre)
+        bool infinite_dir = false;  // orthographic: wi is fixed, no 1/r^2
+    };
+    std::optional<Connection> sample_wi(const Vec3& ref, Vec2 u_lens) const;
+
     // The S/D character of the sensor's position and direction (classification, ch. 8.3.2).
     bool delta_position() const;
     bool delta_direction() const;

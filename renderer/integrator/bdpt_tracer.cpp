@@ -1,0 +1,51 @@
+#include "integrator/bdpt_tracer.h"
+
+namespace omega {
+
+namespace {
+// Unbounded depth still needs a hard stop for scenes that never absorb (a closed perfect mirror box).
+constexpr int kMaxUnboundedVertices = 1 << 16;
+}  // namespace
+
+BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
+    : scene_(scene), set_{desc.type}, max_depth_(desc.max_depth) {
+    const int md = desc.max_depth < 0 ? kMaxUnboundedVertices : desc.max_depth;
+    // k = s + t - 1 <= max_depth: t <= max_depth + 1 (s = 0), s <= max_depth (t = 1).
+    camera_limits_ = {desc.type == IntegratorType::Light ? 0 : md + 1, desc.rr_depth + 1};
+    light_limits_ = {desc.type == IntegratorType::Path ? 0 : md, desc.rr_depth};
+}
+
+Rgb BdptTracer::sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
+                       std::vector<StrategyContribution>* per_strategy) const {
+    auto& cam = scratch.camera;
+    auto& lit = scratch.light;
+    const int n_cam = camera_limits_.max_vertices > 0 ? generate_camera_subpath(scene_, ray, camera_limits_, rng, stats, cam) : 0;
+    const int n_light = light_limits_.max_vertices > 0 ? generate_light_subpath(scene_, light_limits_, rng, stats, lit) : 0;
+    if (n_light == 0) lit.clear();
+
+    Rgb L(0.f);
+    // t = 1 needs no camera subpath; s = 1 samples its light vertex afresh (next-event estimation).
+    const int t_max = std::max(n_cam, 1);
+    for (int t = 1; t <= t_max; ++t) {
+        const int s_max = std::max(n_light, 1);
+        for (int s = 0; s <= s_max; ++s) {
+            const int k = s + t - 1;
+            if (k < 1 || (max_depth_ >= 0 && k > max_depth_)) continue;
+            if (!set_.allows(s, t)) continue;
+            if (t >= 2 && t > n_cam) continue;
+            if (s >= 2 && s > n_light) continue;
+            if (t == 1 && s > n_light) continue;
+            if (s == 0 && cam[size_t(t - 1)].light < 0) continue;  // only a hit light can end here
+            auto c = connect(scene_, lit, cam, s, t, set_, rng, stats, scratch.connect);
+            if (!c) continue;
+            Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
+            Rgb weighted = unweighted * float(c->weight);
+            if (per_strategy) per_strategy->push_back({s, t, unweighted, weighted, c->splat, c->film});
+            if (c->splat) splats.push_back({c->film, weighted});
+            else L += weighted;
+        }
+    }
+    return L;
+}
+
+}  // namespace omega

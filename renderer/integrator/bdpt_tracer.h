@@ -1,0 +1,57 @@
+#pragma once
+// Per-thread tracer for the splatting integrators: bidirectional path tracing (every (s, t)
+// strategy) and light tracing (t = 1 only), both over the path-space core in pathspace/.
+// The same engine restricted to s <= 1 is the path tracer, used by tests to check the fast
+// PathTracer against the general MIS routine.
+#include <vector>
+
+#include "integrator/path_tracer.h"
+#include "pathspace/connect.h"
+
+namespace omega {
+
+// A t = 1 contribution: lands at a film position, on every pixel its filter reaches.
+struct Splat {
+    Vec2 film;
+    Rgb value;  // already multiplied by the sensor importance; times the filter weight per pixel
+};
+
+// Optional per-strategy images (pbrt's visualizestrategies): unweighted and weighted sums.
+struct StrategyImages {
+    int max_s = 0, max_t = 0;
+    bool enabled() const { return max_s > 0; }
+};
+
+// Scratch owned by one worker thread.
+struct BdptScratch {
+    std::vector<PathVertex> camera, light;
+    ConnectStats connect;
+};
+
+struct StrategyContribution {
+    int s, t;
+    Rgb unweighted, weighted;  // splats: already times the sensor importance
+    bool splat;
+    Vec2 film;
+};
+
+class BdptTracer {
+public:
+    // Concurrency: const after construction; sample() may run on any number of threads.
+    BdptTracer(const Scene& scene, const IntegratorDesc& desc);
+    // One sample for the pixel whose camera ray is `ray`. Returns the camera-side contribution
+    // (strategies t >= 2) and appends the light-tracing splats (t = 1). If `per_strategy` is
+    // given, every strategy's contribution is also recorded there.
+    Rgb sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
+               std::vector<StrategyContribution>* per_strategy = nullptr) const;
+
+    const StrategySet& strategies() const { return set_; }
+
+private:
+    const Scene& scene_;
+    StrategySet set_;
+    int max_depth_;
+    WalkLimits camera_limits_, light_limits_;
+};
+
+}  // namespace omega

@@ -1,0 +1,225 @@
+#include "pathspace/connect.h"
+
+#include <cmath>
+
+#include "light/light_emission.h"
+#include "scene/spawn.h"
+
+namespace omega {
+
+namespace {
+
+// Density (solid angle) with which light `li`'s emission sampling leaves v0 towards w.
+double emission_pdf_dir(const Scene& scene, const PathVertex& v0, const Vec3& w, double* pdf_pos = nullptr) {
+    double pp, pd;
+    light_pdf_le(scene, scene.lights()[size_t(v0.light)], v0.hit.ng, w, pp, pd);
+    if (pdf_pos) *pdf_pos = pp;
+    return pd;
+}
+
+
+// Unit direction from a to b; for a vertex at infinity, its direction of travel reversed.
+Vec3 dir_to(const PathVertex& a, const PathVertex& b) {
+    if (b.infinite) return -b.dir;
+    if (a.infinite) return a.dir;
+    return normalize(b.p() - a.p());
+}
+
+// Density with which the sensor subpath (through the sensor at `cam`) generates `next`.
+double sensor_density_at(const Scene& scene, const PathVertex& cam, const PathVertex& next) {
+    const Sensor& sensor = scene.sensor();
+    Vec3 w = normalize(next.p() - cam.p());
+    Sensor::Pdf pdf = sensor.pdf_we(cam.p(), w);
+    if (sensor.delta_direction()) return pdf.pos * absdot(w, next.hit.ng);
+    return to_area_density(cam, pdf.dir, next);
+}
+
+// Density with which a light's emission (from v0) generates `next`.
+double emission_density_at(const Scene& scene, const PathVertex& v0, const PathVertex& next) {
+    if (v0.infinite) {
+        double pdf_pos = 0;
+        emission_pdf_dir(scene, v0, v0.dir, &pdf_pos);
+        return pdf_pos * absdot(v0.dir, next.hit.ng);
+    }
+    Vec3 w = normalize(next.p() - v0.p());
+    double pd = emission_pdf_dir(scene, v0, w);
+    if (std::holds_alternative<DirectionalLight>(scene.lights()[size_t(v0.light)])) return 1.0;
+    return to_area_density(v0, pd, next);
+}
+
+// Density of the light endpoint v0 from the light side (selection x position, or direction at infinity).
+double light_origin_density(const Scene& scene, const PathVertex& v0) {
+    double pmf = scene.light_selection().pmf(size_t(v0.light));
+    const Light& l = scene.lights()[size_t(v0.light)];
+    if (v0.infinite) return pmf * infinite_light_pdf_dir(l, v0.dir) + (std::holds_alternative<DirectionalLight>(l) ? pmf : 0.0);
+    if (light_is_delta(l)) return pmf;
+    double pp = 0;
+    emission_pdf_dir(scene, v0, Vec3{0, 0, 1}, &pp);
+    return pmf * pp;
+}
+
+}  // namespace
+
+FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
+                            const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
+                            const PathVertex* sampled_sensor) {
+    const int n = s + t;
+    FullPathPdfs fp;
+    fp.p_light.resize(size_t(n));
+    fp.p_sensor.resize(size_t(n));
+    fp.delta.assign(size_t(n), 0);
+    auto V = [&](int i) -> const PathVertex& {
+        if (i < s) return (i == 0 && sampled_light) ? *sampled_light : light[size_t(i)];
+        int j = t - 1 - (i - s);
+        return (j == 0 && sampled_sensor) ? *sampled_sensor : camera[size_t(j)];
+    };
+    for (int i = 0; i < n; ++i) {
+        const PathVertex& v = V(i);
+        fp.p_light[size_t(i)] = i < s ? v.pdf_fwd : v.pdf_rev;
+        fp.p_sensor[size_t(i)] = i < s ? v.pdf_rev : v.pdf_fwd;
+        fp.delta[size_t(i)] = v.delta ? 1 : 0;
+    }
+    // Endpoints are never S in the sense of a scattering event; their own sampling connects them.
+    fp.delta[0] = 0;
+    fp.delta[size_t(n - 1)] = 0;
+
+    const PathVertex& v0 = V(0);
+    const Light& light0 = scene.lights()[size_t(v0.light)];
+    fp.light_hittable = !light_is_delta(light0);
+    fp.p_light[0] = light_origin_density(scene, v0);
+
+    // Densities across the connecting edge v_{s-1} -- v_s and one step beyond, which neither
+    // subpath could know when it was generated.
+    if (s >= 1 && t >= 1) {
+        const PathVertex& a = V(s - 1);  // light side
+        const PathVertex& b = V(s);      // sensor side
+        // p_sensor[s-1]: b generating a.
+        if (t == 1) fp.p_sensor[size_t(s - 1)] = sensor_density_at(scene, b, a);
+        else fp.p_sensor[size_t(s - 1)] = to_area_density(b, vertex_pdf_sa(b, b.wo, dir_to(b, a)), a);
+        // p_sensor[s-2]: a generating its predecessor, having arrived from b.
+        if (s >= 2) {
+            const PathVertex& a2 = V(s - 2);
+            fp.p_sensor[size_t(s - 2)] =
+                (s - 2 == 0 && (!fp.light_hittable)) ? 0.0 : to_area_density(a, vertex_pdf_sa(a, dir_to(a, b), dir_to(a, a2)), a2);
+        }
+        // p_light[s]: a generating b.
+        if (s == 1) fp.p_light[1] = emission_density_at(scene, a, b);
+        else fp.p_light[size_t(s)] = to_area_density(a, vertex_pdf_sa(a, a.wo, dir_to(a, b)), b);
+        // p_light[s+1]: b generating its successor towards the sensor, having arrived from a.
+        if (t >= 2) {
+            const PathVertex& b2 = V(s + 1);
+            fp.p_light[size_t(s + 1)] = to_area_density(b, vertex_pdf_sa(b, dir_to(b, a), dir_to(b, b2)), b2);
+        }
+    } else if (s == 0) {
+        // The sensor subpath hit the light: v0 = camera[t-1]. The light side generates v1 by emission.
+        if (t >= 2) fp.p_light[1] = emission_density_at(scene, v0, V(1));
+    }
+    return fp;
+}
+
+std::optional<Connection> connect(const Scene& scene, const std::vector<PathVertex>& light,
+                                  const std::vector<PathVertex>& camera, int s, int t, const StrategySet& set,
+                                  Rng& rng, TracerStats& stats, ConnectStats& cstats) {
+    Connection c;
+    PathVertex sampled;
+    const PathVertex* sampled_light = nullptr;
+    const PathVertex* sampled_sensor = nullptr;
+    if (s == 0) {
+        // The camera subpath's last vertex is on a light.
+        if (t < 2) return std::nullopt;
+        const PathVertex& z = camera[size_t(t - 1)];
+        if (z.light < 0) return std::nullopt;
+        const Light& l = scene.lights()[size_t(z.light)];
+        if (z.infinite) {
+            if (!std::holds_alternative<ConstantLight>(l)) return std::nullopt;
+            c.L = z.beta * std::get<ConstantLight>(l).radiance;
+        } else {
+            c.L = z.beta * area_light_le(std::get<AreaLight>(l), z.hit, z.wo);
+        }
+    } else if (t == 1) {
+        // Connect a light vertex to the sensor (light tracing).
+        const PathVertex& y = light[size_t(s - 1)];
+        if (!y.connectible() || y.infinite) return std::nullopt;
+        const Sensor& sensor = scene.sensor();
+        auto sc = sensor.sample_wi(y.p(), {rng.next_1d(), rng.next_1d()});
+        if (!sc) return std::nullopt;
+        sampled.kind = VertexKind::Sensor;
+        sampled.hit.p = sc->p;
+        Sensor::Pdf pdf = sensor.pdf_we(sc->p, -sc->wi);
+        sampled.pdf_fwd = sensor.delta_direction() ? 1.0 : pdf.pos;
+        sampled_sensor = &sampled;
+        if (y.kind == VertexKind::Light) {
+            // s = 1: the light itself seen by the sensor. Emission towards the sensor over the
+            // density of the light endpoint (selection x position).
+            Rgb le = light_emission_towards(scene.lights()[size_t(y.light)], y.hit, sc->wi);
+            c.L = le * float(1.0 / light_origin_density(scene, y));
+        } else {
+            c.L = y.beta * vertex_f(y, sc->wi, TransportMode::Importance) * absdot(sc->wi, y.hit.ns);
+        }
+        if (is_black(c.L)) return std::nullopt;
+        double geo = sc->infinite_dir ? 1.0 : 1.0 / (double(sc->dist) * sc->dist);
+        c.L *= float(geo);
+        ++stats.rays;
+        Ray shadow = is_black(y.hit.ng) ? Ray{y.p(), sc->p - y.p(), 1.f - kShadowEpsilon}
+                                        : spawn_ray_to(y.hit, sc->p, Vec3(0.f), Vec3(0.f));
+        if (scene.occluded(shadow)) return std::nullopt;
+        c.splat = true;
+        c.film = sc->film;
+        c.importance = sc->importance;
+    } else if (s == 1) {
+        // Next-event estimation: sample a point on a light from the camera vertex.
+        const PathVertex& z = camera[size_t(t - 1)];
+        if (!z.connectible() || z.kind != VertexKind::Surface) return std::nullopt;
+        const auto& sel = scene.light_selection();
+        if (sel.empty()) return std::nullopt;
+        size_t li = sel.sample(rng.next_1d());
+        double pmf = sel.pmf(li);
+        const Light& l = scene.lights()[li];
+        auto ls = light_sample_li(scene, l, z.p(), {rng.next_1d(), rng.next_1d()});
+        if (!ls || ls->pdf_sa <= 0 || is_black(ls->Li)) return std::nullopt;
+        sampled.kind = VertexKind::Light;
+        sampled.light = int(li);
+        sampled.infinite = ls->infinite;
+        sampled.dir = -ls->wi;
+        sampled.hit.p = ls->p;
+        sampled.hit.planar = false;
+        sampled.hit.ng = ls->n;
+        sampled.hit.p_error = ls->p_error;
+        sampled_light = &sampled;
+        Rgb f = vertex_f(z, ls->wi, TransportMode::Radiance) * absdot(ls->wi, z.hit.ns);
+        if (is_black(f)) return std::nullopt;
+        c.L = z.beta * f * ls->Li / float(pmf * ls->pdf_sa);
+        ++stats.rays;
+        Ray shadow = ls->infinite ? spawn_ray(z.hit, ls->wi) : spawn_ray_to(z.hit, ls->p, ls->p_error, ls->n);
+        if (scene.occluded(shadow)) return std::nullopt;
+    } else {
+        const PathVertex& y = light[size_t(s - 1)];
+        const PathVertex& z = camera[size_t(t - 1)];
+        if (!y.connectible() || !z.connectible() || y.kind != VertexKind::Surface || z.kind != VertexKind::Surface)
+            return std::nullopt;
+        Vec3 d = z.p() - y.p();
+        float dist2 = length_sq(d);
+        if (!(dist2 > 0)) return std::nullopt;
+        Vec3 w = d / std::sqrt(dist2);
+        Rgb fy = vertex_f(y, w, TransportMode::Importance);
+        Rgb fz = vertex_f(z, -w, TransportMode::Radiance);
+        if (is_black(fy) || is_black(fz)) return std::nullopt;
+        float g = absdot(w, y.hit.ns) * absdot(w, z.hit.ns) / dist2;
+        c.L = y.beta * fy * fz * z.beta * g;
+        if (is_black(c.L)) return std::nullopt;
+        ++stats.rays;
+        if (scene.occluded(spawn_ray_to(y.hit, z.p(), z.hit.p_error, z.hit.ng))) return std::nullopt;
+    }
+    if (is_black(c.L)) return std::nullopt;
+
+    FullPathPdfs fp = full_path_pdfs(scene, light, camera, s, t, sampled_light, sampled_sensor);
+    double w = mis_weight(fp, s, set);
+    if (w < 0) {
+        ++cstats.bad_weights;
+        return std::nullopt;
+    }
+    c.weight = w;
+    return c;
+}
+
+}  // namespace omega

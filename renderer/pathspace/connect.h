@@ -1,0 +1,38 @@
+#pragma once
+// Joining a light subpath prefix (s vertices) and a camera subpath prefix (t vertices) into one
+// full path with k = s + t - 1 edges: its unweighted contribution f(x)/p(x), and the densities
+// every strategy would have had for it (FullPathPdfs) for the MIS weight.
+#include <optional>
+#include <vector>
+
+#include "pathspace/mis.h"
+#include "pathspace/subpath.h"
+
+namespace omega {
+
+struct Connection {
+    Rgb L;               // unweighted contribution f/p of the full path
+    double weight = 1;   // MIS weight (power heuristic over the integrator's strategies)
+    bool splat = false;  // t = 1: lands at `film` instead of the camera subpath's pixel
+    Vec2 film;
+    double importance = 0;  // t = 1: multiply by the filter weight of each pixel it reaches
+};
+
+struct ConnectStats {
+    uint64_t bad_weights = 0;  // non-finite MIS weights: counted as errors, contribution dropped
+};
+
+// Strategy (s, t) for the given subpaths (light.size() >= s, camera.size() >= t). Returns nothing
+// if the strategy cannot produce a path here (delta vertices, no light hit, occluded...).
+std::optional<Connection> connect(const Scene& scene, const std::vector<PathVertex>& light,
+                                  const std::vector<PathVertex>& camera, int s, int t, const StrategySet& set,
+                                  Rng& rng, TracerStats& stats, ConnectStats& cstats);
+
+// Builds the densities of the full path light[0..s) + reverse(camera[0..t)), with sampled_light
+// standing in for light[0] (s = 1) and sampled_sensor for camera[0] (t = 1) when the connection
+// sampled that endpoint afresh.
+FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
+                            const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
+                            const PathVertex* sampled_sensor);
+
+}  // namespace omega

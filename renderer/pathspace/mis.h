@@ -1,0 +1,47 @@
+#pragma once
+// One MIS routine for every integrator (path, light, bdpt): the power heuristic over the
+// strategies (s, t) that could have produced a full path, restricted to the strategies the
+// integrator uses. Ratios accumulate in double.
+//
+// A full path has vertices v_0 (on a light) ... v_k (on the sensor), k edges. For each vertex:
+//   p_light[i]  = density of generating v_i from the light side (area measure; solid angle for
+//                 a vertex at infinity; 1 through a delta event),
+//   p_sensor[i] = the same from the sensor side.
+// Strategy s uses light vertices v_0..v_{s-1} and sensor vertices v_s..v_k (t = k + 1 - s):
+//   p_s = prod_{i<s} p_light[i] * prod_{i>=s} p_sensor[i],  so  p_{s+1} / p_s = p_light[s] / p_sensor[s].
+#include <cstdint>
+#include <vector>
+
+#include "scene/scene_desc.h"
+
+namespace omega {
+
+struct FullPathPdfs {
+    std::vector<double> p_light, p_sensor;
+    std::vector<uint8_t> delta;  // v_i is S: no strategy can connect an edge at it
+    bool light_hittable = true;  // s = 0: the light can be hit by a sensor subpath (not delta in position or direction)
+    int k() const { return int(p_light.size()) - 1; }
+};
+
+// Which (s, t) strategies an integrator uses. Strategies outside the set get no weight.
+struct StrategySet {
+    IntegratorType type = IntegratorType::Bdpt;
+    bool allows(int s, int t) const {
+        switch (type) {
+            case IntegratorType::Path: return s <= 1;
+            case IntegratorType::Light: return t == 1;
+            case IntegratorType::Bdpt: return true;
+        }
+        return false;
+    }
+};
+
+// Can strategy s produce this path at all (ignoring the integrator)? t = 0 never: the lens is
+// not part of the scene.
+bool strategy_possible(const FullPathPdfs& path, int s);
+
+// Power-heuristic weight of strategy s. Returns a negative value if the computation is not
+// finite (an error the caller counts, never a silent NaN).
+double mis_weight(const FullPathPdfs& path, int s, const StrategySet& set);
+
+}  // namespace omega

@@ -1,0 +1,38 @@
+#pragma once
+// Local path sampling (Veach 8.2.2.1): camera and light subpaths by random walks.
+#include <vector>
+
+#include "integrator/path_tracer.h"
+#include "pathspace/vertex.h"
+#include "sampling/rng.h"
+#include "scene/scene.h"
+
+namespace omega {
+
+struct WalkLimits {
+    int max_vertices = 8;  // including the endpoint
+    int rr_depth = 5;      // vertex count after which Russian roulette may end the walk
+};
+
+// path[0] is the sensor vertex for `ray` (a camera ray from Sensor::generate_ray, whose
+// throughput is 1 by importance sampling). Returns the number of vertices.
+int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits& lim, Rng& rng, TracerStats& stats,
+                            std::vector<PathVertex>& path);
+
+// path[0] is a light vertex chosen by power. Returns the number of vertices (0 if the light
+// emitted nothing along the sampled ray).
+int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, TracerStats& stats,
+                           std::vector<PathVertex>& path);
+
+// Area density at `to` of a direction sampled at `from` with solid-angle density pdf_sa
+// (eq. 8.10); vertices at infinity keep the solid-angle density.
+double to_area_density(const PathVertex& from, double pdf_sa, const PathVertex& to);
+
+// f at a surface vertex towards world direction wi, with the previous vertex of its own
+// subpath on the wo side. In Importance mode the shading-normal correction (Veach 5.3) applies.
+Rgb vertex_f(const PathVertex& v, const Vec3& wi, TransportMode mode);
+// Solid-angle density at surface vertex v of sampling direction `to` when the walk arrived
+// from direction `from` (both unit world directions pointing away from v).
+double vertex_pdf_sa(const PathVertex& v, const Vec3& from, const Vec3& to);
+
+}  // namespace omega
