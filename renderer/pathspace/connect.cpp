@@ -18,35 +18,6 @@ double emission_pdf_dir(const Scene& scene, const PathVertex& v0, const Vec3& w,
 }
 
 
-// Unit direction from a to b; for a vertex at infinity, its direction of travel reversed.
-Vec3 dir_to(const PathVertex& a, const PathVertex& b) {
-    if (b.infinite) return -b.dir;
-    if (a.infinite) return a.dir;
-    return normalize(b.p() - a.p());
-}
-
-// Density with which the sensor subpath (through the sensor at `cam`) generates `next`.
-double sensor_density_at(const Scene& scene, const PathVertex& cam, const PathVertex& next) {
-    const Sensor& sensor = scene.sensor();
-    Vec3 w = normalize(next.p() - cam.p());
-    Sensor::Pdf pdf = sensor.pdf_we(cam.p(), w);
-    if (sensor.delta_direction()) return pdf.pos * absdot(w, next.hit.ng);
-    return to_area_density(cam, pdf.dir, next);
-}
-
-// Density with which a light's emission (from v0) generates `next`.
-double emission_density_at(const Scene& scene, const PathVertex& v0, const PathVertex& next) {
-    if (v0.infinite) {
-        double pdf_pos = 0;
-        emission_pdf_dir(scene, v0, v0.dir, &pdf_pos);
-        return pdf_pos * absdot(v0.dir, next.hit.ng);
-    }
-    Vec3 w = normalize(next.p() - v0.p());
-    double pd = emission_pdf_dir(scene, v0, w);
-    if (std::holds_alternative<DirectionalLight>(scene.lights()[size_t(v0.light)])) return 1.0;
-    return to_area_density(v0, pd, next);
-}
-
 // Density of the light endpoint v0 from the light side (selection x position, or direction at infinity).
 double light_origin_density(const Scene& scene, const PathVertex& v0) {
     double pmf = scene.light_selection().pmf(size_t(v0.light));
@@ -93,33 +64,38 @@ FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& l
     if (s >= 1 && t >= 1) {
         const PathVertex& a = V(s - 1);  // light side
         const PathVertex& b = V(s);      // sensor side
+        // A density taken through a delta vertex is the discrete 1, as the walks record it. Only
+        // impossible strategies connect there, but every split must yield the same table.
+        auto through = [](const PathVertex& v, double pdf_area) { return v.delta ? 1.0 : pdf_area; };
         // p_sensor[s-1]: b generating a.
         if (t == 1) fp.p_sensor[size_t(s - 1)] = sensor_density_at(scene, b, a);
-        else fp.p_sensor[size_t(s - 1)] = to_area_density(b, vertex_pdf_sa(b, b.wo, dir_to(b, a)), a);
+        else fp.p_sensor[size_t(s - 1)] = through(b, to_area_density(b, vertex_pdf_sa(b, b.wo, direction(b, a)), a));
         // p_sensor[s-2]: a generating its predecessor, having arrived from b.
         if (s >= 2) {
             const PathVertex& a2 = V(s - 2);
-            fp.p_sensor[size_t(s - 2)] =
-                (s - 2 == 0 && (!fp.light_hittable)) ? 0.0 : to_area_density(a, vertex_pdf_sa(a, dir_to(a, b), dir_to(a, a2)), a2);
+            fp.p_sensor[size_t(s - 2)] = through(a, to_area_density(a, vertex_pdf_sa(a, direction(a, b), direction(a, a2)), a2));
         }
         // p_light[s]: a generating b.
         if (s == 1) fp.p_light[1] = emission_density_at(scene, a, b);
-        else fp.p_light[size_t(s)] = to_area_density(a, vertex_pdf_sa(a, a.wo, dir_to(a, b)), b);
+        else fp.p_light[size_t(s)] = through(a, to_area_density(a, vertex_pdf_sa(a, a.wo, direction(a, b)), b));
         // p_light[s+1]: b generating its successor towards the sensor, having arrived from a.
         if (t >= 2) {
             const PathVertex& b2 = V(s + 1);
-            fp.p_light[size_t(s + 1)] = to_area_density(b, vertex_pdf_sa(b, dir_to(b, a), dir_to(b, b2)), b2);
+            fp.p_light[size_t(s + 1)] = through(b, to_area_density(b, vertex_pdf_sa(b, direction(b, a), direction(b, b2)), b2));
         }
     } else if (s == 0) {
         // The sensor subpath hit the light: v0 = camera[t-1]. The light side generates v1 by emission.
         if (t >= 2) fp.p_light[1] = emission_density_at(scene, v0, V(1));
     }
+    // A light that cannot be hit has no density from the sensor side.
+    if (!fp.light_hittable) fp.p_sensor[0] = 0;
     return fp;
 }
 
 std::optional<Connection> connect(const Scene& scene, const std::vector<PathVertex>& light,
                                   const std::vector<PathVertex>& camera, int s, int t, const StrategySet& set,
-                                  Rng& rng, TracerStats& stats, ConnectStats& cstats) {
+                                  Rng& rng, TracerStats& stats, ConnectStats& cstats,
+                                  std::vector<PathVertex>* full_path, FullPathPdfs* pdfs) {
     Connection c;
     PathVertex sampled;
     const PathVertex* sampled_light = nullptr;
@@ -219,6 +195,12 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         return std::nullopt;
     }
     c.weight = w;
+    if (full_path) {
+        full_path->clear();
+        for (int i = 0; i < s; ++i) full_path->push_back((i == 0 && sampled_light) ? *sampled_light : light[size_t(i)]);
+        for (int j = t - 1; j >= 0; --j) full_path->push_back((j == 0 && sampled_sensor) ? *sampled_sensor : camera[size_t(j)]);
+    }
+    if (pdfs) *pdfs = fp;
     return c;
 }
 

@@ -22,11 +22,14 @@ struct ConnectStats {
     uint64_t bad_weights = 0;  // non-finite MIS weights: counted as errors, contribution dropped
 };
 
+// Strategy (s, t) for the given subpaths. Tests may ask for the full path v_0..v_k (light end
+// first, endpoints included) and its densities.
 // Strategy (s, t) for the given subpaths (light.size() >= s, camera.size() >= t). Returns nothing
 // if the strategy cannot produce a path here (delta vertices, no light hit, occluded...).
 std::optional<Connection> connect(const Scene& scene, const std::vector<PathVertex>& light,
                                   const std::vector<PathVertex>& camera, int s, int t, const StrategySet& set,
-                                  Rng& rng, TracerStats& stats, ConnectStats& cstats);
+                                  Rng& rng, TracerStats& stats, ConnectStats& cstats,
+                                  std::vector<PathVertex>* full_path = nullptr, FullPathPdfs* pdfs = nullptr);
 
 // Builds the densities of the full path light[0..s) + reverse(camera[0..t)), with sampled_light
 // standing in for light[0] (s = 1) and sampled_sensor for camera[0] (t = 1) when the connection

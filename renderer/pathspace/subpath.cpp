@@ -9,9 +9,6 @@ namespace omega {
 
 namespace {
 
-// How the first edge of a walk converts its direction density to area at the first hit.
-enum class FirstEdge { SolidAngle, Projected };
-
 // Veach's correction for shading normals in adjoint transport: keeps light tracing consistent
 // with radiance transport when ns != ng.
 float shading_correction(const PathVertex& v, const Vec3& wo, const Vec3& wi) {
@@ -22,13 +19,30 @@ float shading_correction(const PathVertex& v, const Vec3& wo, const Vec3& wi) {
 
 bool consistent_side(const Vec3& w_world, const Vec3& ng, float cos_shading) { return dot(w_world, ng) * cos_shading > 0; }
 
-int random_walk(const Scene& scene, Ray ray, Rgb beta, double pdf_dir, FirstEdge first, TransportMode mode,
-                const WalkLimits& lim, Rng& rng, TracerStats& stats, std::vector<PathVertex>& path) {
-    bool first_edge = true;
+// Density with which the walk's last vertex, arriving from v, generates its predecessor.
+double density_back(const Scene&, const std::vector<PathVertex>& path, const PathVertex& v) {
+    const PathVertex& cur = path.back();
+    const PathVertex& pred = path[path.size() - 2];
+    if (cur.kind != VertexKind::Surface) return 0.0;
+    if (cur.delta) return 1.0;
+    return to_area_density(cur, vertex_pdf_sa(cur, direction(cur, v), direction(cur, pred)), pred);
+}
+
+// Density with which the walk's last vertex generates v (area at v; solid angle at infinity).
+double density_towards(const Scene& scene, const std::vector<PathVertex>& path, const PathVertex& v) {
+    const PathVertex& cur = path.back();
+    if (cur.kind == VertexKind::Sensor) return sensor_density_at(scene, cur, v);
+    if (cur.kind == VertexKind::Light) return emission_density_at(scene, cur, v);
+    if (cur.delta) return 1.0;
+    return to_area_density(cur, vertex_pdf_sa(cur, cur.wo, direction(cur, v)), v);
+}
+
+int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const WalkLimits& lim, Rng& rng,
+                TracerStats& stats, std::vector<PathVertex>& path) {
     while (int(path.size()) < lim.max_vertices) {
         SurfaceHit hit;
         ++stats.rays;
-        PathVertex& prev_ref = path.back();
+        const size_t n = path.size();
         if (!scene.intersect(ray, hit)) {
             // A camera subpath that escapes ends on the environment, a vertex at infinity.
             int env = scene.environment_light();
@@ -36,10 +50,11 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, double pdf_dir, FirstEdge
                 PathVertex v;
                 v.kind = VertexKind::Light;
                 v.infinite = true;
-                v.dir = -ray.d;
+                v.dir = -normalize(ray.d);
                 v.light = env;
                 v.beta = beta;
-                v.pdf_fwd = pdf_dir;
+                v.pdf_fwd = density_towards(scene, path, v);
+                if (n >= 2) path[n - 2].pdf_rev = density_back(scene, path, v);
                 path.push_back(v);
             }
             break;
@@ -47,14 +62,17 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, double pdf_dir, FirstEdge
         PathVertex v;
         v.kind = VertexKind::Surface;
         v.hit = hit;
-        v.wo = -normalize(ray.d);
+        // From the stored positions rather than the ray, so later evaluations at this vertex
+        // (connections, reverse densities) agree exactly with what any split recomputes.
+        v.wo = path.back().infinite ? -path.back().dir : normalize(path.back().p() - hit.p);
         v.bsdf = &scene.bsdf_of(hit);
         v.light = scene.shapes()[hit.shape].light;
         v.shading = Frame::from_normal(hit.ns);
         v.beta = beta;
-        if (first_edge && first == FirstEdge::Projected) v.pdf_fwd = pdf_dir * absdot(v.wo, hit.ng);
-        else v.pdf_fwd = to_area_density(prev_ref, pdf_dir, v);
-        first_edge = false;
+        // Densities from the vertex positions, exactly as a connection would compute them, so
+        // every split of a path sees the same numbers.
+        v.pdf_fwd = density_towards(scene, path, v);
+        if (n >= 2) path[n - 2].pdf_rev = density_back(scene, path, v);
         path.push_back(v);
         if (int(path.size()) >= lim.max_vertices) break;
         PathVertex& cur = path.back();
@@ -68,19 +86,9 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, double pdf_dir, FirstEdge
         if (!bs || is_black(bs->weight)) break;
         Vec3 wi = cur.shading.to_world(bs->wi);
         if (!consistent_side(wi, hit.ng, bs->wi.z)) break;
-        double pdf_fwd_sa, pdf_rev_sa;
-        if (bs->is_delta()) {
-            cur.delta = true;
-            pdf_fwd_sa = pdf_rev_sa = 1.0;  // discrete choice: cancels in every ratio
-        } else {
-            pdf_fwd_sa = bs->pdf_sa;
-            pdf_rev_sa = bsdf_pdf_sa(*cur.bsdf, bs->wi, wo_local, mode);
-        }
+        cur.delta = bs->is_delta();
         beta *= bs->weight;
         if (mode == TransportMode::Importance) beta *= shading_correction(cur, cur.wo, wi);
-        // The density of the previous vertex as seen from this one, now that both directions are known.
-        PathVertex& prev = path[path.size() - 2];
-        prev.pdf_rev = cur.delta ? 1.0 : to_area_density(cur, pdf_rev_sa, prev);
 
         if (int(path.size()) > lim.rr_depth) {
             float q = std::min(1.f, max_component(beta));
@@ -90,22 +98,48 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, double pdf_dir, FirstEdge
             }
         }
         ray = spawn_ray(hit, wi);
-        // After a delta choice the next vertex's density is the discrete 1 (marker -1: no conversion).
-        pdf_dir = cur.delta ? -1.0 : pdf_fwd_sa;
     }
     return int(path.size());
 }
 
 }  // namespace
 
+Vec3 direction(const PathVertex& a, const PathVertex& b) {
+    if (b.infinite) return -b.dir;
+    if (a.infinite) return a.dir;
+    return normalize(b.p() - a.p());
+}
+
+double sensor_density_at(const Scene& scene, const PathVertex& cam, const PathVertex& next) {
+    const Sensor& sensor = scene.sensor();
+    Vec3 w = direction(cam, next);
+    Sensor::Pdf pdf = sensor.pdf_we(cam.p(), w);
+    // Orthographic: the direction is fixed, the position density projects onto the surface.
+    if (sensor.delta_direction()) return pdf.pos * (next.is_on_surface() ? absdot(w, next.hit.ng) : 1.f);
+    return to_area_density(cam, pdf.dir, next);
+}
+
+double emission_density_at(const Scene& scene, const PathVertex& v0, const PathVertex& next) {
+    const Light& l = scene.lights()[size_t(v0.light)];
+    double pdf_pos, pdf_dir;
+    if (v0.infinite) {
+        // The ray starts on a disk facing the direction: its area density projects onto next.
+        light_pdf_le(scene, l, v0.hit.ng, v0.dir, pdf_pos, pdf_dir);
+        return pdf_pos * (next.is_on_surface() ? absdot(v0.dir, next.hit.ng) : 1.f);
+    }
+    light_pdf_le(scene, l, v0.hit.ng, direction(v0, next), pdf_pos, pdf_dir);
+    return to_area_density(v0, pdf_dir, next);
+}
+
 double to_area_density(const PathVertex& from, double pdf_sa, const PathVertex& to) {
-    if (pdf_sa < 0) return 1.0;  // through a delta event
     if (to.infinite) return pdf_sa;
-    Vec3 d = to.p() - from.p();
-    double dist2 = double(length_sq(d));
+    // In double: float positions subtract exactly, so every split of a path computes the same
+    // density even for vertices a few ulps apart (in corners).
+    Vec3d d = Vec3d(to.p()) - Vec3d(from.p());
+    double dist2 = length_sq(d);
     if (!(dist2 > 0)) return 0.0;
     double pdf = pdf_sa / dist2;
-    if (to.is_on_surface()) pdf *= std::abs(double(dot(to.hit.ng, d))) / std::sqrt(dist2);
+    if (to.is_on_surface()) pdf *= std::abs(dot(Vec3d(to.hit.ng), d)) / std::sqrt(dist2);
     return pdf;
 }
 
@@ -136,8 +170,7 @@ int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits
     cam.beta = Rgb(1.f);
     path.push_back(cam);
     if (!(pdf.pos > 0) || !(pdf.dir > 0)) return 1;  // cannot happen for a ray the sensor generated
-    return random_walk(scene, ray, Rgb(1.f), ortho ? pdf.pos : pdf.dir, ortho ? FirstEdge::Projected : FirstEdge::SolidAngle,
-                       TransportMode::Radiance, lim, rng, stats, path);
+    return random_walk(scene, ray, Rgb(1.f), TransportMode::Radiance, lim, rng, stats, path);
 }
 
 int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, TracerStats& stats,
@@ -165,11 +198,7 @@ int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, 
     double cos0 = std::holds_alternative<AreaLight>(light) ? absdot(e->origin.ng, e->ray.d) : 1.0;
     Rgb beta = e->Le * float(cos0 / (pmf * e->pdf_pos * e->pdf_dir));
     if (!is_finite(beta) || is_black(beta)) return 1;
-    if (e->infinite)
-        return random_walk(scene, e->ray, beta, e->pdf_pos, FirstEdge::Projected, TransportMode::Importance, lim, rng,
-                           stats, path);
-    return random_walk(scene, e->ray, beta, e->delta_dir ? -1.0 : e->pdf_dir, FirstEdge::SolidAngle,
-                       TransportMode::Importance, lim, rng, stats, path);
+    return random_walk(scene, e->ray, beta, TransportMode::Importance, lim, rng, stats, path);
 }
 
 }  // namespace omega

@@ -28,6 +28,13 @@ int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, 
 // (eq. 8.10); vertices at infinity keep the solid-angle density.
 double to_area_density(const PathVertex& from, double pdf_sa, const PathVertex& to);
 
+// Unit direction from a to b (vertices at infinity by their direction of travel).
+Vec3 direction(const PathVertex& a, const PathVertex& b);
+// Density with which the sensor at `cam` generates `next` (camera-side MIS density).
+double sensor_density_at(const Scene& scene, const PathVertex& cam, const PathVertex& next);
+// Density with which the light endpoint v0 (finite or at infinity) emits towards `next`.
+double emission_density_at(const Scene& scene, const PathVertex& v0, const PathVertex& next);
+
 // f at a surface vertex towards world direction wi, with the previous vertex of its own
 // subpath on the wo side. In Importance mode the shading-normal correction (Veach 5.3) applies.
 Rgb vertex_f(const PathVertex& v, const Vec3& wi, TransportMode mode);
