@@ -22,6 +22,7 @@ using Clock = std::chrono::steady_clock;
 constexpr long long kDefaultSpp = 64;
 constexpr long long kMaxPassSpp = 256;
 constexpr double kPassSeconds = 1.0;
+constexpr long long kMinBatches = 16;
 constexpr long long kMinSppForErrorHalt = 16;  // variance estimates below this are too noisy to stop on
 
 PathTracerSettings tracer_settings(const IntegratorDesc& d) { return {d.max_depth, d.rr_depth}; }
@@ -207,7 +208,10 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
         // Aim for passes of about kPassSeconds so progress, checkpoints and halts stay responsive;
         // pass boundaries never change the image, only how often it is reported.
         long long fit = (long long)(kPassSeconds * report.samples_per_s / double(std::max<long long>(1, pixels)));
-        pass_spp = std::clamp(fit, 1LL, std::min(kMaxPassSpp, pass_spp * 2));
+        long long cap = std::min(kMaxPassSpp, pass_spp * 2);
+        // Splatting integrators estimate variance from batch means: keep at least ~16 batches.
+        if (bdpt_ && spp_limit > 0) cap = std::min(cap, std::max(1LL, spp_limit / kMinBatches));
+        pass_spp = std::clamp(fit, 1LL, cap);
     }
     return report;
 }
