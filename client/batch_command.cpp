@@ -134,6 +134,9 @@ BatchManifest parse_manifest(const std::string& path) {
         if (!j.IsMap()) P.fail(j, key, "expected a mapping with at least `scene`");
         // The job's own keys win over the defaults.
         std::map<std::string, YAML::Node> keys;
+        // A halt the job gives replaces the defaults' halt instead of conflicting with it.
+        const bool own_halt = j["spp"] || j["time"] || j["target_error"];
+        auto is_halt = [](const std::string& k) { return k == "spp" || k == "time" || k == "target_error"; };
         for (const YAML::Node* src : std::initializer_list<const YAML::Node*>{&defaults, &j}) {
             if (!*src) continue;
             for (const auto& kv : *src) {
@@ -141,6 +144,7 @@ BatchManifest parse_manifest(const std::string& path) {
                 if (!kJobKeys.count(k))
                     P.fail(kv.first, src == &j ? key + "." + k : "defaults." + k,
                            "unknown key (scene, output, priority, spp, time, target_error, seed, integrator, frames, matrix)");
+                if (src == &defaults && own_halt && is_halt(k)) continue;
                 keys[k] = kv.second;
             }
         }

@@ -63,7 +63,7 @@ public:
     };
     using Handler = std::function<void(Session&, const protocol::DecodedFrame&)>;
 
-    explicit FakeDaemon(Handler h) : handler_(std::move(h)) {
+    explicit FakeDaemon(Handler h, bool refuse_hello = false) : handler_(std::move(h)), refuse_hello_(refuse_hello) {
         path_ = (dir_.path / "d.sock").string();
         listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
         sockaddr_un sa{};
@@ -107,6 +107,11 @@ private:
                 if (f.type == protocol::MessageType::bye) return;
                 if (!greeted) {
                     if (f.type != protocol::MessageType::hello) return;
+                    if (refuse_hello_) {
+                        s.reply(protocol::Error{f.id, protocol::ErrorCode::unsupported_version,
+                                                "this daemon speaks protocol versions 7..9"});
+                        return;
+                    }
                     protocol::Welcome w;
                     w.id = f.id;
                     w.server = "fake-omegad/0";
@@ -127,6 +132,7 @@ private:
     std::string path_;
     int listen_fd_ = -1;
     Handler handler_;
+    bool refuse_hello_ = false;
     std::atomic<bool> stop_{false};
     std::atomic<int> next_index_{0};
     std::thread accept_thread_;
