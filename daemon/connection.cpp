@@ -42,7 +42,10 @@ Connection::ReadStatus Connection::read_frames(std::vector<protocol::DecodedFram
       break;
     }
     if (errno == EINTR) continue;
-    if (errno != EAGAIN && errno != EWOULDBLOCK) status = ReadStatus::error;
+    if (errno != EAGAIN && errno != EWOULDBLOCK) {
+      decoder_.finish();  // a reset inside a frame is a truncated frame
+      status = ReadStatus::error;
+    }
     break;
   }
   while (auto f = decoder_.next()) out.push_back(std::move(*f));
