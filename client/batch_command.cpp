@@ -211,6 +211,23 @@ BatchManifest parse_manifest(const std::string& path) {
             BatchEntry e;
             e.where = fmt::format("{}:{}", path, j.Mark().line + 1);
             e.spec = spec;
+            // A variable named like a job key also sets that key: matrix: {seed: [1, 2, 3]}.
+            for (const auto& [n, v] : values) {
+                const YAML::Node at = keys.count("matrix") ? keys["matrix"] : keys["frames"];
+                const YAML::Node val(v);
+                const std::string vk = key + ".matrix." + n;
+                try {
+                    if (n == "seed") e.spec.seed = uint64_t(P.integer(val, vk, 0, std::numeric_limits<long long>::max()));
+                    if (n == "priority") e.spec.priority = P.integer(val, vk, proto::kMinPriority, proto::kMaxPriority);
+                    if (n == "spp") e.spec.halt = proto::Halt{uint64_t(P.integer(val, vk, 1, 1LL << 40)), {}, {}};
+                } catch (const ClientError&) {
+                    P.fail(at, vk, fmt::format("'{}' is not a valid {}", v, n));
+                }
+                if (n == "integrator") {
+                    if (v != "path" && v != "light" && v != "bdpt") P.fail(at, vk, "one of path, light, bdpt");
+                    e.spec.integrator = v;
+                }
+            }
             const std::string scene = substitute(P, keys["scene"], key + ".scene", scene_t, values);
             const fs::path sp = fs::path(scene).is_relative() ? dir / scene : fs::path(scene);
             e.scene = sp.lexically_normal().string();

@@ -44,11 +44,14 @@ jobs:
   - scene: stereo_{eye}.yaml
     matrix: {eye: [left, right], take: [1, 2]}
     time: 30
+  - scene: shots/b.yaml
+    matrix: {seed: [7, 8]}
+    output: b_{seed}.exr
 )");
     BatchManifest m = parse_manifest(p.string());
     EXPECT_EQ(m.concurrency, 3);
     EXPECT_EQ(m.retries, 1);
-    ASSERT_EQ(m.jobs.size(), 1u + 3u + 4u);
+    ASSERT_EQ(m.jobs.size(), 1u + 3u + 4u + 2u);
     const std::string dir = d.path.string();
     EXPECT_EQ(m.jobs[0].scene, dir + "/shots/a.yaml");
     EXPECT_EQ(m.jobs[0].output, dir + "/renders/a.exr");
@@ -65,6 +68,12 @@ jobs:
     EXPECT_EQ(m.jobs[4].scene, dir + "/stereo_left.yaml");
     EXPECT_EQ(m.jobs[4].output, dir + "/renders/stereo_left_left_1.exr");
     EXPECT_EQ(m.jobs[7].label, "stereo_right.yaml eye=right take=2");
+    // A variable named like a job key sets it.
+    EXPECT_EQ(m.jobs[8].spec.seed, 7u);
+    EXPECT_EQ(m.jobs[9].spec.seed, 8u);
+    EXPECT_EQ(m.jobs[9].output, dir + "/renders/b_8.exr");
+    EXPECT_EQ(parse_error(d, "jobs:\n  - {scene: a.yaml, matrix: {seed: [1, x]}, output: '{seed}.exr'}\n"),
+              ":2: jobs[0].matrix.seed: 'x' is not a valid seed");
 }
 
 TEST(BatchManifest, ErrorsNameFileAndLine) {
