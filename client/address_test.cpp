@@ -64,3 +64,15 @@ TEST(Address, ExplicitHostWinsOverDefault) {
 }
 
 }  // namespace omega::client
+
+#include "connection.h"
+
+namespace omega::client {
+
+TEST(Auth, MacMatchesTheProtocolTestVector) {
+    std::string nonce;
+    for (int i = 0; i < 16; ++i) nonce += "8f3a";
+    EXPECT_EQ(auth_mac("s3cret", nonce, "alice"), "26b1d5bb85c36f62ee57db9aa7a7c24e7333efbaa9f211742be5491a046287df");
+}
+
+}  // namespace omega::client
