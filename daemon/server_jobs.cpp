@@ -213,6 +213,7 @@ void Server::on_finish(WorkerResult res) {
           publisher_.done(res.job, JobState::done, p, std::nullopt);
           log_.info("job {}: done: {} spp in {:.2f} s", res.job, p.spp, p.elapsed_s);
         }
+        memo_.erase(res.job);  // result.exr and the final checkpoint serve it from now on
         break;
       case WorkerResult::Outcome::failed:
         store_->set_state(res.job, JobState::failed, res.message);
