@@ -1,17 +1,26 @@
-// omega: the command-line client. Exit codes: 0 ok, 1 internal error, 2 bad input, 3 daemon
-// unreachable or refused.
+// omega: the command-line client. A thin dispatcher: every command lives in omega_client.
+// Exit codes: 0 ok, 1 internal error, 2 bad input, 3 daemon unreachable or refused.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include <exception>
 
+#include "batch_command.h"
+#include "job_commands.h"
 #include "render_command.h"
+#include "submit_command.h"
 
 int main(int argc, char** argv) {
     CLI::App app{"omega: unbiased light transport renderer and render-daemon client"};
     app.require_subcommand(1);
     omega::RenderArgs render;
     omega::add_render_command(app, render);
+    omega::client::SubmitArgs submit;
+    omega::client::add_submit_command(app, submit);
+    omega::client::JobCommands jobs;
+    omega::client::add_job_commands(app, jobs);
+    omega::client::BatchArgs batch;
+    omega::client::add_batch_command(app, batch);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -20,6 +29,9 @@ int main(int argc, char** argv) {
     }
     try {
         if (app.got_subcommand("render")) return omega::run_render(render);
+        if (app.got_subcommand("submit")) return omega::client::run_submit(submit);
+        if (app.got_subcommand("batch")) return omega::client::run_batch(batch);
+        if (int rc = omega::client::run_job_command(app, jobs); rc >= 0) return rc;
     } catch (const std::exception& e) {
         fmt::print(stderr, "omega: internal error: {}\n", e.what());
         return 1;

@@ -72,13 +72,11 @@ private:
 const char* const kRgb[3] = {"R", "G", "B"};
 const char* const kVar[3] = {"var.R", "var.G", "var.B"};
 
-std::vector<uint8_t> encode(const Film& film, const Rect& rect, const ExrMeta& meta) {
-    const Rect c = film.crop();
-    if (rect.x0 < c.x0 || rect.y0 < c.y0 || rect.x1 > c.x1 || rect.y1 > c.y1 || rect.width() <= 0 ||
-        rect.height() <= 0)
-        throw std::invalid_argument("EXR rect is empty or outside the film crop");
-
-    const Imath::Box2i display({0, 0}, {film.width() - 1, film.height() - 1});
+// Encodes six float planes (R G B var.R var.G var.B, each rect-sized, row-major) with the
+// data window rect inside a width x height display window.
+std::vector<uint8_t> encode_planes(int width, int height, const Rect& rect, const std::vector<float>& planes,
+                                   const ExrMeta& meta) {
+    const Imath::Box2i display({0, 0}, {width - 1, height - 1});
     const Imath::Box2i data({rect.x0, rect.y0}, {rect.x1 - 1, rect.y1 - 1});
     Imf::Header header(display, data, 1.f, Imath::V2f(0, 0), 1.f, Imf::INCREASING_Y, Imf::ZIP_COMPRESSION);
     for (int k = 0; k < 3; ++k) {
@@ -98,21 +96,13 @@ std::vector<uint8_t> encode(const Film& film, const Rect& rect, const ExrMeta& m
     header.insert("omega.rel_error", Imf::DoubleAttribute(meta.rel_error));
 
     const size_t w = size_t(rect.width()), h = size_t(rect.height()), area = w * h;
-    std::vector<float> planes(6 * area);  // R G B var.R var.G var.B, one plane each
-    for (int y = rect.y0; y < rect.y1; ++y)
-        for (int x = rect.x0; x < rect.x1; ++x) {
-            const PixelStats s = film.pixel(x, y);
-            const size_t i = size_t(y - rect.y0) * w + size_t(x - rect.x0);
-            for (int k = 0; k < 3; ++k) {
-                planes[size_t(k) * area + i] = float(s.mean[k]);
-                planes[size_t(3 + k) * area + i] = float(s.var_of_mean[k]);
-            }
-        }
     Imf::FrameBuffer fb;
+    // OpenEXR's slices take non-const pointers but only read them when writing.
+    float* base = const_cast<float*>(planes.data());
     for (int k = 0; k < 3; ++k) {
-        fb.insert(kRgb[k], Imf::Slice::Make(Imf::FLOAT, &planes[size_t(k) * area], data, sizeof(float),
+        fb.insert(kRgb[k], Imf::Slice::Make(Imf::FLOAT, base + size_t(k) * area, data, sizeof(float),
                                             sizeof(float) * w));
-        fb.insert(kVar[k], Imf::Slice::Make(Imf::FLOAT, &planes[size_t(3 + k) * area], data, sizeof(float),
+        fb.insert(kVar[k], Imf::Slice::Make(Imf::FLOAT, base + size_t(3 + k) * area, data, sizeof(float),
                                             sizeof(float) * w));
     }
     MemOStream os;
@@ -123,6 +113,26 @@ std::vector<uint8_t> encode(const Film& film, const Rect& rect, const ExrMeta& m
         out.writePixels(int(h));
     }
     return os.take();
+}
+
+std::vector<uint8_t> encode(const Film& film, const Rect& rect, const ExrMeta& meta) {
+    const Rect c = film.crop();
+    if (rect.x0 < c.x0 || rect.y0 < c.y0 || rect.x1 > c.x1 || rect.y1 > c.y1 || rect.width() <= 0 ||
+        rect.height() <= 0)
+        throw std::invalid_argument("EXR rect is empty or outside the film crop");
+
+    const size_t w = size_t(rect.width()), area = w * size_t(rect.height());
+    std::vector<float> planes(6 * area);  // R G B var.R var.G var.B, one plane each
+    for (int y = rect.y0; y < rect.y1; ++y)
+        for (int x = rect.x0; x < rect.x1; ++x) {
+            const PixelStats s = film.pixel(x, y);
+            const size_t i = size_t(y - rect.y0) * w + size_t(x - rect.x0);
+            for (int k = 0; k < 3; ++k) {
+                planes[size_t(k) * area + i] = float(s.mean[k]);
+                planes[size_t(3 + k) * area + i] = float(s.var_of_mean[k]);
+            }
+        }
+    return encode_planes(film.width(), film.height(), rect, planes, meta);
 }
 
 std::string number_text(double v) {
@@ -191,9 +201,11 @@ ExrImage read_image(Imf::InputFile& file, long long max_pixels) {
     return img;
 }
 
+}  // namespace
+
 // Writes all of bytes to path via path.tmp, fsync and rename, so a crash leaves the old file or
 // the new one. The directory is synced too so the rename itself survives a power cut.
-void write_file_atomic(const std::string& path, const std::vector<uint8_t>& bytes) {
+void write_file_atomic(const std::string& path, std::span<const uint8_t> bytes) {
     const std::string tmp = path + ".tmp";
     auto fail = [&](const char* what) {
         const int err = errno;
@@ -230,8 +242,6 @@ void write_file_atomic(const std::string& path, const std::vector<uint8_t>& byte
     }
 }
 
-}  // namespace
-
 void write_exr(const std::string& path, const Film& film, const ExrMeta& meta) {
     std::vector<uint8_t> bytes;
     try {
@@ -240,6 +250,21 @@ void write_exr(const std::string& path, const Film& film, const ExrMeta& meta) {
         throw std::runtime_error("write_exr: " + path + ": " + e.what());
     }
     write_file_atomic(path, bytes);
+}
+
+std::vector<uint8_t> encode_exr_image(const ExrImage& img, const ExrMeta& meta) {
+    const Rect rect{img.x0, img.y0, img.x0 + img.width, img.y0 + img.height};
+    const size_t area = size_t(img.width) * size_t(img.height);
+    if (img.width <= 0 || img.height <= 0 || img.x0 < 0 || img.y0 < 0 || rect.x1 > img.display_width ||
+        rect.y1 > img.display_height || img.rgb.size() != 3 * area || (!img.var.empty() && img.var.size() != 3 * area))
+        throw std::invalid_argument("encode_exr_image: inconsistent image size or data window");
+    std::vector<float> planes(6 * area, 0.f);
+    for (size_t i = 0; i < area; ++i)
+        for (size_t k = 0; k < 3; ++k) {
+            planes[k * area + i] = img.rgb[3 * i + k];
+            if (!img.var.empty()) planes[(3 + k) * area + i] = img.var[3 * i + k];
+        }
+    return encode_planes(img.display_width, img.display_height, rect, planes, meta);
 }
 
 ExrImage read_exr(const std::string& path, long long max_pixels) {

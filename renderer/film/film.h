@@ -140,6 +140,15 @@ ExrImage read_exr(const std::string& path, long long max_pixels = 1LL << 26);
 // In-memory EXR of one rectangle of the film (inside crop()), same channels and attributes as
 // write_exr; the data window is rect, the display window the full film. For progressive tiles.
 std::vector<uint8_t> encode_exr_tile(const Film& film, const Rect& rect, const ExrMeta& meta);
+// The same file format for an image already in memory (R,G,B and var.*, the latter zero if absent),
+// with the given attributes; e.g. a client that assembled streamed tiles. Throws
+// std::invalid_argument when the buffers do not match the size or the data window lies outside
+// the display window.
+std::vector<uint8_t> encode_exr_image(const ExrImage& img, const ExrMeta& meta);
+// Writes bytes to PATH.tmp, fsyncs and renames it over PATH (what write_exr does). Throws
+// std::runtime_error naming the path on failure.
+void write_file_atomic(const std::string& path, std::span<const uint8_t> bytes);
+
 // Decodes bytes from the network or a cache: anything malformed or truncated, or a data window
 // over max_pixels, throws std::runtime_error.
 ExrImage decode_exr_memory(std::span<const uint8_t> bytes, long long max_pixels = 1LL << 24);

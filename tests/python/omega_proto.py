@@ -177,3 +177,100 @@ def done(id, job, state, info, message=None):
 def image(id, job, pass_, spp, width, height, exr):
     return encode_frame({"type": "image", "id": id, "job": job, "pass": pass_, "spp": spp,
                          "width": width, "height": height}, exr)
+
+
+# ---- a blocking client over a socket (tests and tools) ----
+
+class Client:
+    """One session with omegad. addr: "unix:/path" or "tcp:host:port". Every wait is bounded."""
+
+    def __init__(self, addr, timeout=20.0, client_name="omega_proto.py"):
+        import socket
+        if addr.startswith("unix:"):
+            self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            target = addr[5:]
+        elif addr.startswith("tcp:"):
+            host, port = addr[4:].rsplit(":", 1)
+            self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            target = (host, int(port))
+        else:
+            raise ValueError(addr)
+        self.sock.settimeout(timeout)
+        self.sock.connect(target)
+        self.timeout = timeout
+        self.decoder = Decoder()
+        self.pending = []  # frames read but not yet consumed
+        self.next_id = 1
+        self.welcome = None
+        if client_name is not None:
+            self.sock.sendall(hello(self.new_id(), client_name))
+            self.welcome = self.recv()
+
+    def new_id(self):
+        i = self.next_id
+        self.next_id += 1
+        return i
+
+    def send(self, data):
+        self.sock.sendall(data)
+
+    def close(self):
+        try:
+            self.sock.close()
+        except OSError:
+            pass
+
+    def _read_more(self, deadline):
+        import time
+        left = deadline - time.monotonic()
+        if left <= 0:
+            raise TimeoutError("no frame from omegad in time")
+        self.sock.settimeout(left)
+        data = self.sock.recv(1 << 20)
+        if not data:
+            raise ConnectionError("omegad closed the connection")
+        self.decoder.feed(data)
+        self.pending.extend(self.decoder.frames())
+
+    def recv(self, timeout=None):
+        """The next frame as (header, payload)."""
+        import time
+        deadline = time.monotonic() + (timeout or self.timeout)
+        while not self.pending:
+            self._read_more(deadline)
+        return self.pending.pop(0)
+
+    def recv_for(self, id, timeout=None):
+        """The next frame whose id is `id`; other frames stay queued."""
+        import time
+        deadline = time.monotonic() + (timeout or self.timeout)
+        while True:
+            for i, (h, p) in enumerate(self.pending):
+                if h.get("id") == id:
+                    return self.pending.pop(i)
+            self._read_more(deadline)
+
+    def request(self, build, *args, **kw):
+        """Sends build(id, *args) and returns the reply header (payload in ["_payload"])."""
+        id = self.new_id()
+        self.send(build(id, *args, **kw))
+        h, p = self.recv_for(id)
+        h["_payload"] = p
+        return h
+
+    def job(self, type, job):
+        return self.request(lambda id: job_request(type, id, job))
+
+    def submit(self, scene, assets=(), send_assets=True, **kw):
+        """Full submit exchange. Returns the final reply header (accepted or error)."""
+        id = self.new_id()
+        self.send(submit(id, scene, assets=assets, **kw))
+        h, _ = self.recv_for(id)
+        if h["type"] != "need_assets":
+            return h
+        if send_assets:
+            by_hash = {hashlib.sha256(d).hexdigest(): d for _, d in assets}
+            for sha in h["missing"]:
+                self.send(asset(id, by_hash[sha]))
+        h, _ = self.recv_for(id)
+        return h

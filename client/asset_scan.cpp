@@ -1,0 +1,150 @@
+#include "asset_scan.h"
+
+#include <fmt/format.h>
+#include <openssl/evp.h>
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "client_error.h"
+#include "scene/scene_error.h"
+#include "scene/scene_parser.h"
+
+namespace omega::client {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct MdCtx {
+    EVP_MD_CTX* c = EVP_MD_CTX_new();
+    ~MdCtx() { EVP_MD_CTX_free(c); }
+};
+
+std::string hex(const unsigned char* d, unsigned n) {
+    static const char* k = "0123456789abcdef";
+    std::string s;
+    for (unsigned i = 0; i < n; ++i) {
+        s += k[d[i] >> 4];
+        s += k[d[i] & 15];
+    }
+    return s;
+}
+
+// A name the protocol accepts as is: relative, '/'-separated, no empty, '.' or '..' component.
+bool clean_relative(const std::string& s) {
+    if (s.empty() || s.front() == '/' || s.find('\\') != std::string::npos || s.find('\0') != std::string::npos)
+        return false;
+    std::stringstream ss(s);
+    std::string part;
+    size_t count = 0;
+    while (std::getline(ss, part, '/')) {
+        if (part.empty() || part == "." || part == "..") return false;
+        ++count;
+    }
+    return count > 0 && s.back() != '/';
+}
+
+std::string read_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw ClientError(kExitBadInput, fmt::format("{}: cannot open the scene file", path));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+}  // namespace
+
+std::string sha256_bytes(const std::string& bytes) {
+    unsigned char md[EVP_MAX_MD_SIZE];
+    unsigned n = 0;
+    MdCtx ctx;
+    if (!ctx.c || !EVP_DigestInit_ex(ctx.c, EVP_sha256(), nullptr) ||
+        !EVP_DigestUpdate(ctx.c, bytes.data(), bytes.size()) || !EVP_DigestFinal_ex(ctx.c, md, &n))
+        throw ClientError(kExitInternal, "SHA-256 failed");
+    return hex(md, n);
+}
+
+std::string sha256_file(const std::string& path, uint64_t* size) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw ClientError(kExitBadInput, fmt::format("{}: cannot read", path));
+    MdCtx ctx;
+    if (!ctx.c || !EVP_DigestInit_ex(ctx.c, EVP_sha256(), nullptr)) throw ClientError(kExitInternal, "SHA-256 failed");
+    std::vector<char> buf(1 << 20);
+    uint64_t total = 0;
+    while (in) {
+        in.read(buf.data(), std::streamsize(buf.size()));
+        const auto got = in.gcount();
+        if (got > 0) {
+            EVP_DigestUpdate(ctx.c, buf.data(), size_t(got));
+            total += uint64_t(got);
+        }
+    }
+    if (in.bad()) throw ClientError(kExitBadInput, fmt::format("{}: read error", path));
+    unsigned char md[EVP_MAX_MD_SIZE];
+    unsigned n = 0;
+    EVP_DigestFinal_ex(ctx.c, md, &n);
+    if (size) *size = total;
+    return hex(md, n);
+}
+
+std::vector<protocol::AssetRef> ScannedScene::refs() const {
+    std::vector<protocol::AssetRef> out;
+    for (const auto& a : assets) out.push_back({a.name, a.sha256, a.size});
+    return out;
+}
+
+ScannedScene scan_scene(const std::string& scene_path) {
+    ScannedScene s;
+    s.path = scene_path;
+    s.name = fs::path(scene_path).stem().string();
+    s.yaml = read_file(scene_path);
+    SceneDesc desc;
+    try {
+        desc = parse_scene_string(s.yaml, scene_path);
+    } catch (const SceneError& e) {
+        throw ClientError(kExitBadInput, e.what());
+    }
+    s.warnings = desc.warnings;
+
+    // The parser validated every shape; walk the same YAML for the `file:` strings as written.
+    const fs::path dir = fs::path(scene_path).parent_path().empty() ? fs::path(".") : fs::path(scene_path).parent_path();
+    YAML::Node root = YAML::Load(s.yaml);
+    YAML::Node shapes = root["shapes"];
+    bool rewritten = false;
+    std::map<std::string, size_t> by_name;
+    if (shapes && shapes.IsSequence()) {
+        for (size_t i = 0; i < shapes.size(); ++i) {
+            YAML::Node shape = shapes[i];
+            if (!shape.IsMap() || !shape["file"] || !shape["file"].IsScalar()) continue;
+            const std::string written = shape["file"].as<std::string>();
+            fs::path p(written);
+            if (p.is_relative()) p = dir / p;
+            ScannedAsset a;
+            a.path = p.lexically_normal().string();
+            a.sha256 = sha256_file(a.path, &a.size);
+            if (clean_relative(written)) {
+                a.name = written;
+            } else {
+                a.name = "assets/" + a.sha256.substr(0, 16) + "/" + fs::path(written).filename().string();
+                shape["file"] = a.name;
+                rewritten = true;
+            }
+            if (auto it = by_name.find(a.name); it != by_name.end()) continue;  // same file twice
+            by_name[a.name] = s.assets.size();
+            s.assets.push_back(std::move(a));
+        }
+    }
+    if (rewritten) {
+        YAML::Emitter em;
+        em << root;
+        s.yaml = std::string(em.c_str()) + "\n";
+    }
+    return s;
+}
+
+}  // namespace omega::client

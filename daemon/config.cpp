@@ -1,0 +1,112 @@
+#include "daemon/config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+
+namespace omega::daemon {
+
+namespace {
+
+struct Reader {
+  const std::string& file;
+  const YAML::Node& root;
+  std::set<std::string> seen;
+
+  [[noreturn]] void fail(const std::string& key, const YAML::Mark& m, const std::string& what) const {
+    throw std::runtime_error(file + ":" + std::to_string(m.line + 1) + ": " + key + ": " + what);
+  }
+  YAML::Node get(const std::string& key) {
+    seen.insert(key);
+    return root[key];
+  }
+  template <class T>
+  void scalar(const std::string& key, T& out) {
+    YAML::Node n = get(key);
+    if (!n) return;
+    if (!n.IsScalar()) fail(key, n.Mark(), "expected a scalar");
+    try {
+      out = n.as<T>();
+    } catch (const YAML::Exception&) {
+      fail(key, n.Mark(), "cannot read '" + n.Scalar() + "'");
+    }
+  }
+  void strings(const std::string& key, std::vector<std::string>& out) {
+    YAML::Node n = get(key);
+    if (!n) return;
+    if (!n.IsSequence()) fail(key, n.Mark(), "expected a list of strings");
+    out.clear();
+    for (const auto& item : n) {
+      if (!item.IsScalar()) fail(key, item.Mark(), "expected a string");
+      out.push_back(item.Scalar());
+    }
+  }
+};
+
+}  // namespace
+
+Config load_config(const std::string& path) {
+  Config c;
+  if (path.empty()) return c;
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw std::runtime_error(path + ": cannot read the config file");
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (root.IsNull()) return c;
+  if (!root.IsMap()) throw std::runtime_error(path + ":1: the config must be a mapping");
+  Reader r{path, root, {}};
+  r.strings("listen", c.listen);
+  r.scalar("state_dir", c.state_dir);
+  r.scalar("threads", c.threads);
+  r.scalar("max_running", c.max_running);
+  r.scalar("checkpoint_interval_s", c.checkpoint_interval_s);
+  r.scalar("drain_timeout_s", c.drain_timeout_s);
+  r.strings("allowed_roots", c.allowed_roots);
+  std::string level;
+  r.scalar("log_level", level);
+  if (!level.empty()) {
+    try {
+      c.log_level = parse_log_level(level);
+    } catch (const std::invalid_argument& e) {
+      r.fail("log_level", root["log_level"].Mark(), e.what());
+    }
+  }
+  r.scalar("tile_size", c.tile_size);
+  r.scalar("max_header_bytes", c.max_header_bytes);
+  r.scalar("max_submit_bytes", c.max_submit_bytes);
+  r.scalar("max_asset_bytes", c.max_asset_bytes);
+  r.scalar("output_buffer_bytes", c.output_buffer_bytes);
+  r.scalar("max_connections", c.max_connections);
+  r.scalar("max_pending_submits", c.max_pending_submits);
+  r.scalar("max_queued_jobs", c.max_queued_jobs);
+  for (const auto& kv : root) {
+    std::string key = kv.first.as<std::string>();
+    if (!r.seen.count(key)) r.fail(key, kv.first.Mark(), "unknown key");
+  }
+  validate_config(c);
+  return c;
+}
+
+void validate_config(const Config& c) {
+  auto bad = [](const std::string& what) { throw std::runtime_error("config: " + what); };
+  if (c.state_dir.empty()) bad("state_dir: must not be empty");
+  if (c.threads < 0) bad("threads: must be >= 0");
+  if (c.max_running < 1) bad("max_running: must be >= 1");
+  if (c.checkpoint_interval_s < 0) bad("checkpoint_interval_s: must be >= 0");
+  if (c.drain_timeout_s < 0) bad("drain_timeout_s: must be >= 0");
+  if (c.tile_size < 4 || c.tile_size > 1024) bad("tile_size: must be in [4, 1024]");
+  if (c.max_header_bytes < 1024 || c.max_header_bytes > (1u << 30)) bad("max_header_bytes: must be in [1 KiB, 1 GiB]");
+  if (c.max_connections < 1) bad("max_connections: must be >= 1");
+  if (c.max_pending_submits < 1) bad("max_pending_submits: must be >= 1");
+  if (c.output_buffer_bytes < (1u << 16)) bad("output_buffer_bytes: must be >= 64 KiB");
+  for (const auto& r : c.allowed_roots)
+    if (!std::filesystem::path(r).is_absolute()) bad("allowed_roots: '" + r + "' is not an absolute path");
+}
+
+}  // namespace omega::daemon

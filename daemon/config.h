@@ -1,0 +1,39 @@
+#pragma once
+// omegad's configuration: a YAML file (docs/daemon.md lists every key) overridden by the command
+// line. Loaded at start-up and again on SIGHUP (listeners and state_dir only take effect at start).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "daemon/log.h"
+
+namespace omega::daemon {
+
+struct Config {
+  std::vector<std::string> listen;  // "unix:/path" or "tcp:host:port"
+  std::string state_dir = "/var/lib/omega";
+  int threads = 0;                  // render workers; 0 = all cores
+  int max_running = 1;              // jobs rendering at once
+  double checkpoint_interval_s = 30;  // at most one checkpoint per job this often (0 = every pass)
+  double drain_timeout_s = 30;      // SIGTERM: how long running jobs get to reach a pass boundary
+  std::vector<std::string> allowed_roots;  // absolute dirs a scene may read besides its own assets
+  LogLevel log_level = LogLevel::info;
+  int tile_size = 32;
+  // Limits.
+  std::uint64_t max_header_bytes = 1u << 20;
+  std::uint64_t max_submit_bytes = 64ull << 20;
+  std::uint64_t max_asset_bytes = 1ull << 30;
+  std::uint64_t output_buffer_bytes = 256ull << 20;  // per client, besides coalesced tiles
+  int max_connections = 1024;
+  int max_pending_submits = 4;  // per connection
+  int max_queued_jobs = 10000;
+};
+
+// Throws std::runtime_error "FILE: key: what" for an unreadable file, an unknown key or a bad
+// value. An empty path gives the defaults.
+Config load_config(const std::string& path);
+
+// Checks a whole config (after command-line overrides). Throws std::runtime_error.
+void validate_config(const Config& c);
+
+}  // namespace omega::daemon

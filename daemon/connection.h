@@ -1,0 +1,72 @@
+#pragma once
+// One client connection: a non-blocking socket, an incremental frame decoder with limits, and a
+// bounded, coalescing output queue. Owned by the Server; loop thread only.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "daemon/listener.h"
+#include "daemon/output_queue.h"
+#include "protocol/frame_decoder.h"
+#include "protocol/messages.h"
+
+namespace omega::daemon {
+
+// A submit waiting for its assets or for validation.
+struct PendingSubmit {
+  protocol::Submit submit;
+  std::set<std::string> missing;  // sha256 still to come
+  bool validating = false;
+};
+
+class Connection {
+ public:
+  Connection(int fd, std::uint64_t id, Peer peer, const protocol::DecoderLimits& limits, std::size_t out_limit);
+  ~Connection();
+  Connection(const Connection&) = delete;
+  Connection& operator=(const Connection&) = delete;
+
+  int fd() const { return fd_; }
+  std::uint64_t id() const { return id_; }
+  const Peer& peer() const { return peer_; }
+
+  enum class ReadStatus { open, eof, error };
+  // Reads what the socket holds (up to a budget, so one client cannot starve the others) and
+  // appends complete frames to `out`. On a framing error the frames before it are still returned
+  // and framing_error() is set.
+  ReadStatus read_frames(std::vector<protocol::DecodedFrame>& out);
+  const std::optional<protocol::Failure<protocol::FrameError>>& framing_error() const { return decoder_.error(); }
+
+  void send(const protocol::Frame& f);  // never dropped; counts against the limit
+  void send_coalesced(const CoalesceKey& key, const std::string& header,
+                      std::shared_ptr<const std::string> payload);
+  // Writes what the socket takes now. False on a write error (the peer is gone).
+  bool flush();
+  bool wants_write() const { return !out_.empty(); }
+  bool over_limit() const { return out_.owned_bytes() > out_limit_; }
+  const OutputQueue& output() const { return out_; }
+
+  // Session state.
+  bool welcomed = false;
+  std::string user;     // job owner: the uid in decimal on unix sockets, "tcp" otherwise
+  bool closing = false; // close once the output is written (after bye or a fatal error)
+  bool dead = false;    // close now
+  std::map<std::uint64_t, PendingSubmit> pending;  // by submit id
+  std::set<std::pair<std::uint64_t, std::uint64_t>> subscriptions;  // (job, subscribe id)
+  bool write_armed = false;  // EPOLLOUT registered
+
+ private:
+  int fd_;
+  std::uint64_t id_;
+  Peer peer_;
+  protocol::FrameDecoder decoder_;
+  std::string inbuf_;  // bytes read but not yet taken by the decoder
+  OutputQueue out_;
+  std::size_t out_limit_;
+};
+
+}  // namespace omega::daemon

@@ -1,0 +1,202 @@
+#include "daemon/job_store.h"
+
+#include <sqlite3.h>
+
+#include <stdexcept>
+
+namespace omega::daemon {
+
+namespace {
+
+class Stmt {
+ public:
+  Stmt(sqlite3* db, const std::string& sql, const std::string& path) : db_(db) {
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s_, nullptr) != SQLITE_OK)
+      throw std::runtime_error(path + ": " + sqlite3_errmsg(db) + " in: " + sql);
+  }
+  ~Stmt() { sqlite3_finalize(s_); }
+  Stmt& bind(int i, std::int64_t v) { sqlite3_bind_int64(s_, i, v); return *this; }
+  Stmt& bind(int i, const std::string& v) { sqlite3_bind_text(s_, i, v.c_str(), int(v.size()), SQLITE_TRANSIENT); return *this; }
+  Stmt& bind(int i, double v) { sqlite3_bind_double(s_, i, v); return *this; }
+  Stmt& bind_null(int i) { sqlite3_bind_null(s_, i); return *this; }
+  template <class T>
+  Stmt& bind_opt(int i, const std::optional<T>& v) {
+    if (v) return bind(i, static_cast<std::conditional_t<std::is_integral_v<T>, std::int64_t, double>>(*v));
+    return bind_null(i);
+  }
+  bool step() {
+    int rc = sqlite3_step(s_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    throw std::runtime_error(std::string("job store: ") + sqlite3_errmsg(db_));
+  }
+  sqlite3_stmt* get() { return s_; }
+
+ private:
+  sqlite3* db_;
+  sqlite3_stmt* s_ = nullptr;
+};
+
+const char* kColumns =
+    "id, name, owner, priority, state, halt_spp, halt_time, halt_error, seed, integrator, "
+    "pass, spp, elapsed_s, rel_error, samples_per_s, message";
+
+std::optional<std::int64_t> opt_int(sqlite3_stmt* s, int i) {
+  if (sqlite3_column_type(s, i) == SQLITE_NULL) return std::nullopt;
+  return sqlite3_column_int64(s, i);
+}
+std::optional<double> opt_double(sqlite3_stmt* s, int i) {
+  if (sqlite3_column_type(s, i) == SQLITE_NULL) return std::nullopt;
+  return sqlite3_column_double(s, i);
+}
+std::string text(sqlite3_stmt* s, int i) {
+  const unsigned char* t = sqlite3_column_text(s, i);
+  return t ? std::string(reinterpret_cast<const char*>(t), std::size_t(sqlite3_column_bytes(s, i))) : std::string();
+}
+
+}  // namespace
+
+std::optional<protocol::JobState> job_state_from_string(std::string_view s) {
+  using protocol::JobState;
+  for (JobState st : {JobState::queued, JobState::running, JobState::paused, JobState::done, JobState::failed,
+                      JobState::cancelled})
+    if (protocol::to_string(st) == s) return st;
+  return std::nullopt;
+}
+
+protocol::JobInfo JobRecord::info() const {
+  protocol::JobInfo i;
+  i.job = id;
+  i.name = name;
+  i.state = state;
+  i.priority = priority;
+  i.owner = owner;
+  i.halt = halt;
+  i.progress = progress;
+  return i;
+}
+
+JobStore::JobStore(const std::string& path) : path_(path) {
+  if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX, nullptr) !=
+      SQLITE_OK) {
+    std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw std::runtime_error(path + ": " + msg);
+  }
+  sqlite3_busy_timeout(db_, 5000);
+  exec("PRAGMA journal_mode=WAL");
+  exec("PRAGMA synchronous=FULL");
+  exec(
+      "CREATE TABLE IF NOT EXISTS jobs ("
+      " id INTEGER PRIMARY KEY AUTOINCREMENT,"
+      " name TEXT NOT NULL, owner TEXT NOT NULL, priority INTEGER NOT NULL, state TEXT NOT NULL,"
+      " halt_spp INTEGER, halt_time REAL, halt_error REAL, seed INTEGER NOT NULL, integrator TEXT NOT NULL,"
+      " pass INTEGER NOT NULL DEFAULT 0, spp INTEGER NOT NULL DEFAULT 0, elapsed_s REAL NOT NULL DEFAULT 0,"
+      " rel_error REAL, samples_per_s REAL NOT NULL DEFAULT 0, message TEXT NOT NULL DEFAULT '',"
+      " created TEXT NOT NULL DEFAULT (datetime('now')))");
+  exec("CREATE INDEX IF NOT EXISTS jobs_queue ON jobs(state, priority DESC, id)");
+}
+
+JobStore::~JobStore() { sqlite3_close(db_); }
+
+void JobStore::exec(const char* sql) {
+  char* err = nullptr;
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    std::string msg = err ? err : "?";
+    sqlite3_free(err);
+    throw std::runtime_error(path_ + ": " + msg);
+  }
+}
+
+std::uint64_t JobStore::insert(const JobRecord& r, const std::function<void(std::uint64_t)>& before_commit) {
+  exec("BEGIN IMMEDIATE");
+  try {
+    Stmt s(db_,
+           "INSERT INTO jobs (name, owner, priority, state, halt_spp, halt_time, halt_error, seed, integrator)"
+           " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+           path_);
+    s.bind(1, r.name).bind(2, r.owner).bind(3, r.priority).bind(4, std::string(protocol::to_string(r.state)));
+    s.bind_opt(5, r.halt.spp).bind_opt(6, r.halt.time_s).bind_opt(7, r.halt.target_error);
+    s.bind(8, static_cast<std::int64_t>(r.seed)).bind(9, r.integrator);
+    s.step();
+    auto id = static_cast<std::uint64_t>(sqlite3_last_insert_rowid(db_));
+    if (before_commit) before_commit(id);
+    exec("COMMIT");
+    return id;
+  } catch (...) {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
+std::vector<JobRecord> JobStore::select(const std::string& where_order, std::optional<std::uint64_t> id) {
+  Stmt s(db_, std::string("SELECT ") + kColumns + " FROM jobs " + where_order, path_);
+  if (id) s.bind(1, static_cast<std::int64_t>(*id));
+  std::vector<JobRecord> out;
+  while (s.step()) {
+    sqlite3_stmt* q = s.get();
+    JobRecord r;
+    r.id = static_cast<std::uint64_t>(sqlite3_column_int64(q, 0));
+    r.name = text(q, 1);
+    r.owner = text(q, 2);
+    r.priority = sqlite3_column_int64(q, 3);
+    r.state = job_state_from_string(text(q, 4)).value_or(protocol::JobState::failed);
+    if (auto v = opt_int(q, 5)) r.halt.spp = static_cast<std::uint64_t>(*v);
+    r.halt.time_s = opt_double(q, 6);
+    r.halt.target_error = opt_double(q, 7);
+    r.seed = static_cast<std::uint64_t>(sqlite3_column_int64(q, 8));
+    r.integrator = text(q, 9);
+    r.progress.pass = static_cast<std::uint64_t>(sqlite3_column_int64(q, 10));
+    r.progress.spp = static_cast<std::uint64_t>(sqlite3_column_int64(q, 11));
+    r.progress.elapsed_s = sqlite3_column_double(q, 12);
+    r.progress.rel_error = opt_double(q, 13);
+    r.progress.samples_per_s = sqlite3_column_double(q, 14);
+    r.message = text(q, 15);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::optional<JobRecord> JobStore::get(std::uint64_t id) {
+  auto v = select("WHERE id = ?", id);
+  if (v.empty()) return std::nullopt;
+  return v.front();
+}
+
+std::vector<JobRecord> JobStore::all() { return select("ORDER BY id"); }
+
+std::vector<JobRecord> JobStore::queued() { return select("WHERE state = 'queued' ORDER BY priority DESC, id"); }
+
+std::size_t JobStore::count_unfinished() {
+  Stmt s(db_, "SELECT count(*) FROM jobs WHERE state IN ('queued', 'running', 'paused')", path_);
+  s.step();
+  return static_cast<std::size_t>(sqlite3_column_int64(s.get(), 0));
+}
+
+void JobStore::set_state(std::uint64_t id, protocol::JobState st, const std::string& message) {
+  Stmt s(db_, "UPDATE jobs SET state = ?, message = ? WHERE id = ?", path_);
+  s.bind(1, std::string(protocol::to_string(st))).bind(2, message).bind(3, static_cast<std::int64_t>(id));
+  s.step();
+}
+
+void JobStore::set_priority(std::uint64_t id, std::int64_t p) {
+  Stmt s(db_, "UPDATE jobs SET priority = ? WHERE id = ?", path_);
+  s.bind(1, p).bind(2, static_cast<std::int64_t>(id));
+  s.step();
+}
+
+void JobStore::set_progress(std::uint64_t id, const protocol::ProgressInfo& p) {
+  Stmt s(db_, "UPDATE jobs SET pass = ?, spp = ?, elapsed_s = ?, rel_error = ?, samples_per_s = ? WHERE id = ?", path_);
+  s.bind(1, static_cast<std::int64_t>(p.pass)).bind(2, static_cast<std::int64_t>(p.spp)).bind(3, p.elapsed_s);
+  s.bind_opt(4, p.rel_error).bind(5, p.samples_per_s).bind(6, static_cast<std::int64_t>(id));
+  s.step();
+}
+
+void JobStore::remove(std::uint64_t id) {
+  Stmt s(db_, "DELETE FROM jobs WHERE id = ?", path_);
+  s.bind(1, static_cast<std::int64_t>(id));
+  s.step();
+}
+
+}  // namespace omega::daemon

@@ -1,0 +1,64 @@
+#pragma once
+// The durable queue: one SQLite database (WAL, synchronous=FULL) under the state dir. Every
+// accepted job is a row; a job is durable once insert() returns. Loop thread only (the
+// connection is not shared).
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "protocol/messages.h"
+
+struct sqlite3;
+
+namespace omega::daemon {
+
+struct JobRecord {
+  std::uint64_t id = 0;
+  std::string name;
+  std::string owner;
+  std::int64_t priority = 0;
+  protocol::JobState state = protocol::JobState::queued;
+  protocol::Halt halt;
+  std::uint64_t seed = 0;
+  std::string integrator;  // empty: the scene's
+  protocol::ProgressInfo progress;
+  std::string message;  // why it failed
+
+  protocol::JobInfo info() const;
+};
+
+class JobStore {
+ public:
+  // Opens or creates PATH. Throws std::runtime_error naming the path and SQLite's message.
+  explicit JobStore(const std::string& path);
+  ~JobStore();
+  JobStore(const JobStore&) = delete;
+  JobStore& operator=(const JobStore&) = delete;
+
+  // Inserts r (its id is ignored) in a transaction. before_commit(id) runs inside it (e.g. to
+  // move the job's files into place); if it throws, the insert is rolled back and the exception
+  // passes on. Returns the new id.
+  std::uint64_t insert(const JobRecord& r, const std::function<void(std::uint64_t)>& before_commit);
+  std::optional<JobRecord> get(std::uint64_t id);
+  std::vector<JobRecord> all();  // by id
+  // Queued jobs in run order: priority (high first), then FIFO.
+  std::vector<JobRecord> queued();
+  std::size_t count_unfinished();
+
+  void set_state(std::uint64_t id, protocol::JobState s, const std::string& message = {});
+  void set_priority(std::uint64_t id, std::int64_t p);
+  void set_progress(std::uint64_t id, const protocol::ProgressInfo& p);
+  void remove(std::uint64_t id);
+
+ private:
+  void exec(const char* sql);
+  std::vector<JobRecord> select(const std::string& where_order, std::optional<std::uint64_t> id = {});
+  sqlite3* db_ = nullptr;
+  std::string path_;
+};
+
+std::optional<protocol::JobState> job_state_from_string(std::string_view s);
+
+}  // namespace omega::daemon

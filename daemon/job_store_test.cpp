@@ -1,0 +1,70 @@
+#include "daemon/job_store.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <stdexcept>
+
+namespace omega::daemon {
+namespace {
+
+struct TempDir {
+  std::filesystem::path p;
+  TempDir() {
+    p = std::filesystem::temp_directory_path() / ("omegad-store-" + std::to_string(::getpid()) + "-" +
+                                                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(p);
+    std::filesystem::create_directories(p);
+  }
+  ~TempDir() { std::filesystem::remove_all(p); }
+};
+
+JobRecord rec(const char* name, std::int64_t prio) {
+  JobRecord r;
+  r.name = name;
+  r.owner = "1000";
+  r.priority = prio;
+  r.halt.spp = 16;
+  return r;
+}
+
+TEST(JobStore, QueueOrderIsPriorityThenFifoAndSurvivesReopening) {
+  TempDir t;
+  std::string db = (t.p / "jobs.sqlite").string();
+  {
+    JobStore s(db);
+    s.insert(rec("a", 0), {});
+    s.insert(rec("b", 5), {});
+    s.insert(rec("c", 0), {});
+    std::uint64_t d = s.insert(rec("d", 9), {});
+    s.set_state(d, protocol::JobState::paused);
+  }
+  JobStore s(db);
+  auto q = s.queued();
+  ASSERT_EQ(q.size(), 3u);
+  EXPECT_EQ(q[0].name, "b");
+  EXPECT_EQ(q[1].name, "a");
+  EXPECT_EQ(q[2].name, "c");
+  EXPECT_EQ(s.get(4)->state, protocol::JobState::paused);
+  EXPECT_EQ(*s.get(1)->halt.spp, 16u);
+  EXPECT_EQ(s.count_unfinished(), 4u);
+}
+
+TEST(JobStore, AFailingBeforeCommitRollsTheInsertBack) {
+  TempDir t;
+  JobStore s((t.p / "jobs.sqlite").string());
+  EXPECT_THROW(s.insert(rec("x", 0), [](std::uint64_t) { throw std::runtime_error("disk full"); }), std::runtime_error);
+  EXPECT_TRUE(s.all().empty());
+  protocol::ProgressInfo p;
+  p.spp = 12;
+  p.rel_error = 0.5;
+  std::uint64_t id = s.insert(rec("y", 0), {});
+  s.set_progress(id, p);
+  EXPECT_EQ(s.get(id)->progress.spp, 12u);
+  EXPECT_EQ(*s.get(id)->progress.rel_error, 0.5);
+  s.remove(id);
+  EXPECT_FALSE(s.get(id));
+}
+
+}  // namespace
+}  // namespace omega::daemon

@@ -1,0 +1,55 @@
+#pragma once
+// Listening sockets: "unix:/path" and "tcp:host:port" (loopback only until TCP auth exists), or
+// sockets handed over by systemd. All non-blocking; accept() is called from the loop thread.
+#include <optional>
+#include <string>
+
+namespace omega::daemon {
+
+struct ListenAddress {
+  enum class Kind { unix_socket, tcp } kind = Kind::unix_socket;
+  std::string path;  // unix
+  std::string host;  // tcp
+  int port = 0;      // tcp; 0 = any free port (tests)
+  std::string text() const;
+};
+
+// Throws std::invalid_argument with a message naming the address for a malformed address or a
+// TCP host that is not a loopback address.
+ListenAddress parse_listen_address(const std::string& s);
+
+struct Peer {
+  bool unix_socket = false;
+  std::optional<unsigned> uid;  // SO_PEERCRED on unix sockets
+  std::string name;             // for logs: "uid 1000 pid 42" or "127.0.0.1:5555"
+};
+
+class Listener {
+ public:
+  // Binds and listens. Throws std::system_error naming the address. A stale unix socket file
+  // (nobody listening) is replaced; a live one is an error.
+  explicit Listener(const ListenAddress& a);
+  // Adopts a socket from systemd.
+  static Listener adopt(int fd);
+  Listener(Listener&& o) noexcept;
+  Listener& operator=(Listener&&) = delete;
+  Listener(const Listener&) = delete;
+  ~Listener();
+
+  int fd() const { return fd_; }
+  bool unix_socket() const { return unix_; }
+  std::string text() const { return text_; }  // "unix:/run/x.sock" or "tcp:127.0.0.1:7171" (actual port)
+
+  // Loop thread: the next connection (non-blocking, close-on-exec), or -1 when none is waiting.
+  int accept_one(Peer& peer);
+
+ private:
+  Listener() = default;
+  int fd_ = -1;
+  bool unix_ = false;
+  bool owns_path_ = false;
+  std::string path_;
+  std::string text_;
+};
+
+}  // namespace omega::daemon

@@ -1,0 +1,222 @@
+#include "daemon/render_worker.h"
+
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "integrator/render_session.h"
+#include "scene/scene.h"
+#include "scene/scene_error.h"
+
+namespace omega::daemon {
+
+const char* to_string(StopKind k) {
+  switch (k) {
+    case StopKind::none: return "none";
+    case StopKind::pause: return "pause";
+    case StopKind::cancel: return "cancel";
+    case StopKind::preempt: return "preempt";
+    case StopKind::drain: return "drain";
+    case StopKind::now: return "now";
+  }
+  return "?";
+}
+
+namespace {
+
+ExrMeta meta_of(const FilmSnapshot& s) {
+  ExrMeta m;
+  m.spp = static_cast<long long>(s.spp);
+  m.time_s = s.elapsed_s;
+  m.integrator = "path";
+  m.nonfinite = s.nonfinite;
+  m.rel_error = s.rel_error.value_or(0);
+  return m;
+}
+
+}  // namespace
+
+std::vector<EncodedTile> encode_tiles(const Film& film, int tile_size, const FilmSnapshot& meta) {
+  std::vector<Rect> rects = film.tiles(tile_size);
+  std::vector<EncodedTile> out(rects.size());
+  ExrMeta m = meta_of(meta);
+  tbb::parallel_for(std::size_t(0), rects.size(), [&](std::size_t i) {
+    const Rect& r = rects[i];
+    auto bytes = encode_exr_tile(film, r, m);
+    out[i].rect = protocol::Rect{std::uint32_t(r.x0), std::uint32_t(r.y0), std::uint32_t(r.x1), std::uint32_t(r.y1)};
+    out[i].exr = std::make_shared<const std::string>(bytes.begin(), bytes.end());
+  });
+  return out;
+}
+
+std::string encode_image(const Film& film, const FilmSnapshot& meta) {
+  auto bytes = encode_exr_tile(film, film.crop(), meta_of(meta));
+  return std::string(bytes.begin(), bytes.end());
+}
+
+RenderWorker::RenderWorker(WorkerSpec spec, Log& log, PassFn on_pass, FinishFn on_finish)
+    : spec_(std::move(spec)), log_(log), on_pass_(std::move(on_pass)), on_finish_(std::move(on_finish)) {}
+
+RenderWorker::~RenderWorker() {
+  request_stop(StopKind::now);
+  join();
+}
+
+void RenderWorker::start() { thread_ = std::thread([this] { run(); }); }
+
+void RenderWorker::join() {
+  if (thread_.joinable()) thread_.join();
+}
+
+void RenderWorker::request_stop(StopKind k) {
+  // A stronger request wins: now > cancel > pause/preempt > drain; never downgrade.
+  auto rank = [](StopKind s) {
+    switch (s) {
+      case StopKind::none: return 0;
+      case StopKind::drain: return 1;
+      case StopKind::preempt: return 2;
+      case StopKind::pause: return 3;
+      case StopKind::cancel: return 4;
+      case StopKind::now: return 5;
+    }
+    return 0;
+  };
+  std::lock_guard lock(mutex_);
+  StopKind cur = stop_requested();
+  if (rank(k) <= rank(cur)) return;
+  stop_.store(static_cast<int>(k));
+  if (k != StopKind::drain && session_) session_->abort();
+}
+
+void RenderWorker::run() {
+  using Clock = std::chrono::steady_clock;
+  WorkerResult result;
+  result.job = spec_.job;
+  std::shared_ptr<const FilmSnapshot> last;
+  bool last_on_disk = false;
+  try {
+    SceneDesc desc = load_job_scene(spec_.paths, spec_.name, spec_.integrator, spec_.allowed_roots);
+    std::unique_ptr<Scene> scene = Scene::build(desc);
+
+    std::shared_ptr<const FilmSnapshot> resume = spec_.resume;
+    if (!resume) {
+      if (auto ck = read_checkpoint(spec_.paths.checkpoint())) {
+        resume = std::make_shared<const FilmSnapshot>(std::move(*ck));
+        last_on_disk = true;
+      }
+    }
+    last = resume;
+
+    RenderSettings rs;
+    rs.halt = desc.sensor.halt;
+    const protocol::Halt& h = spec_.halt;
+    if (h.spp || h.time_s || h.target_error) {
+      rs.halt = HaltDesc{};
+      if (h.spp) rs.halt.spp = static_cast<long long>(*h.spp);
+      rs.halt.time_s = h.time_s;
+      rs.halt.target_error = h.target_error;
+    }
+    const double base_elapsed = resume ? resume->elapsed_s : 0;
+    const std::uint64_t base_pass = resume ? resume->pass : 0;
+    const std::uint64_t base_nonfinite = resume ? resume->nonfinite : 0;
+    if (rs.halt.time_s) rs.halt.time_s = std::max(1e-3, *rs.halt.time_s - base_elapsed);
+    rs.threads = spec_.threads;
+    rs.seed = spec_.seed;
+    rs.tile_size = spec_.tile_size;
+    rs.first_sample = resume ? static_cast<long long>(resume->spp) : 0;
+    rs.integrator = desc.integrator;
+    bool time_done = h.time_s && resume && resume->elapsed_s >= *h.time_s;
+    if (time_done) rs.halt.spp = static_cast<long long>(resume->spp);  // nothing left to render
+
+    RenderSession session(*scene, rs);
+    if (resume) session.film() = Film::deserialize(desc.sensor.film, resume->film);
+    {
+      std::lock_guard lock(mutex_);
+      session_ = &session;
+      StopKind k = stop_requested();
+      if (k != StopKind::none && k != StopKind::drain) session.abort();
+    }
+    log_.info("job {}: rendering from {} spp ({} threads)", spec_.job, rs.first_sample, resolve_threads(rs.threads));
+
+    auto last_ckpt = Clock::now();
+    PassReport final_report = session.run([&](const PassReport& r) {
+      auto snap = std::make_shared<FilmSnapshot>();
+      snap->spp = static_cast<std::uint64_t>(r.spp);
+      snap->pass = base_pass + static_cast<std::uint64_t>(r.pass);
+      snap->elapsed_s = base_elapsed + r.elapsed_s;
+      snap->nonfinite = base_nonfinite + r.nonfinite;
+      if (std::isfinite(r.error.mean_rel_error)) snap->rel_error = r.error.mean_rel_error;
+      snap->film = session.film().serialize();
+      last = snap;
+      last_on_disk = false;
+      const bool draining = stop_requested() == StopKind::drain;
+      const double since = std::chrono::duration<double>(Clock::now() - last_ckpt).count();
+      if (draining || since >= spec_.checkpoint_interval_s) {
+        write_checkpoint(spec_.paths.checkpoint(), *snap);
+        last_on_disk = true;
+        last_ckpt = Clock::now();
+      }
+      PassUpdate u;
+      u.job = spec_.job;
+      u.snapshot = snap;
+      u.film = desc.sensor.film;
+      u.progress.pass = snap->pass;
+      u.progress.spp = snap->spp;
+      u.progress.elapsed_s = snap->elapsed_s;
+      u.progress.rel_error = snap->rel_error;
+      u.progress.samples_per_s = r.samples_per_s;
+      if (watched_.load()) u.tiles = encode_tiles(session.film(), spec_.tile_size, *snap);
+      on_pass_(std::move(u));
+      if (draining) session.abort();  // stop at this boundary: the film is clean and on disk
+    });
+    (void)final_report;
+    {
+      std::lock_guard lock(mutex_);
+      session_ = nullptr;
+    }
+    result.last = last;
+    if (!session.aborted()) {
+      // Halt reached: the film is clean. Keep a final checkpoint and the result image.
+      if (last && !last_on_disk) write_checkpoint(spec_.paths.checkpoint(), *last);
+      FilmSnapshot meta = last ? *last : FilmSnapshot{};
+      ExrMeta m;
+      m.spp = static_cast<long long>(meta.spp);
+      m.time_s = meta.elapsed_s;
+      m.integrator = desc.integrator.type == IntegratorType::Path ? "path"
+                     : desc.integrator.type == IntegratorType::Light ? "light" : "bdpt";
+      m.seed = spec_.seed;
+      m.nonfinite = meta.nonfinite;
+      m.warnings = desc.warnings;
+      m.rel_error = meta.rel_error.value_or(0);
+      write_exr(spec_.paths.result(), session.film(), m);
+      result.outcome = WorkerResult::Outcome::done;
+    } else {
+      result.outcome = WorkerResult::Outcome::stopped;
+      result.stop = stop_requested();
+      // The film holds part of an unfinished pass: what survives is the last boundary.
+      if (last && !last_on_disk && result.stop != StopKind::cancel) write_checkpoint(spec_.paths.checkpoint(), *last);
+    }
+  } catch (const SceneError& e) {
+    result.outcome = WorkerResult::Outcome::failed;
+    result.message = e.what();
+  } catch (const std::exception& e) {
+    result.outcome = WorkerResult::Outcome::failed;
+    result.message = e.what();
+  }
+  {
+    std::lock_guard lock(mutex_);
+    session_ = nullptr;
+  }
+  if (result.outcome == WorkerResult::Outcome::failed) {
+    StopKind k = stop_requested();
+    if (k != StopKind::none) {  // a failure while stopping is just a stop (e.g. the checkpoint dir went away)
+      result.outcome = WorkerResult::Outcome::stopped;
+      result.stop = k;
+    }
+  }
+  result.last = last;
+  on_finish_(std::move(result));
+}
+
+}  // namespace omega::daemon

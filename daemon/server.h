@@ -1,0 +1,125 @@
+#pragma once
+// The daemon: everything hangs off one Server object (no global state). The loop thread runs
+// run(); it owns the sockets, the job store and the tile publisher. Render workers and the
+// background thread talk to it only through EventLoop::post().
+#include <tbb/global_control.h>
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "daemon/asset_cache.h"
+#include "daemon/background.h"
+#include "daemon/config.h"
+#include "daemon/connection.h"
+#include "daemon/event_loop.h"
+#include "daemon/job_store.h"
+#include "daemon/listener.h"
+#include "daemon/log.h"
+#include "daemon/render_worker.h"
+#include "daemon/signals.h"
+#include "daemon/tile_publisher.h"
+
+namespace omega::daemon {
+
+class Server : public FrameSink {
+ public:
+  // overrides: re-applied after every (re)load of the config file (command-line flags).
+  Server(std::string config_path, std::function<void(Config&)> overrides, Log& log);
+  ~Server() override;
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  // Main thread, before run(): loads the config, opens the state dir and the listeners (or
+  // adopts systemd's), recovers jobs. Throws std::runtime_error with a message for the user.
+  void start();
+  // Becomes the loop thread. Returns the exit code once shut down.
+  int run();
+
+  // FrameSink (loop thread).
+  void send_frame(std::uint64_t conn, const protocol::Frame& f) override;
+  void send_coalesced(std::uint64_t conn, const CoalesceKey& key, const std::string& header,
+                      std::shared_ptr<const std::string> payload) override;
+
+ private:
+  struct Active {
+    std::unique_ptr<RenderWorker> worker;
+  };
+  struct Memo {  // the newest film of a job, in memory
+    std::shared_ptr<const FilmSnapshot> snapshot;
+    std::optional<FilmDesc> film;
+  };
+
+  // server.cpp: lifecycle and I/O (loop thread).
+  void apply_config(const Config& c);
+  void open_listeners();
+  void recover_jobs();
+  void on_accept(std::size_t listener);
+  void on_connection_event(std::uint64_t id, std::uint32_t events);
+  void finish_io(Connection& c);
+  void close_connection(std::uint64_t id, const std::string& why);
+  void flush_dirty();
+  Connection* find(std::uint64_t id);
+  void on_signal();
+  void reload();
+  void begin_drain(const char* why);
+  void maybe_finish_shutdown();
+  void watchdog_tick(double interval);
+
+  // server_requests.cpp: protocol handlers (loop thread).
+  void handle_frame(Connection& c, protocol::DecodedFrame& f);
+  void reply_error(Connection& c, std::uint64_t id, protocol::ErrorCode code, const std::string& msg);
+  bool may_modify(const Connection& c, const JobRecord& r) const;
+  void on_submit(Connection& c, protocol::Submit s);
+  void on_asset(Connection& c, protocol::Asset a);
+  void on_job_request(Connection& c, protocol::MessageType t, std::uint64_t id, std::uint64_t job,
+                      std::optional<std::int64_t> priority);
+  void on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job);
+  void on_fetch(Connection& c, std::uint64_t id, std::uint64_t job);
+
+  // server_jobs.cpp: validation, scheduling, worker events (loop thread).
+  void validate(Connection& c, std::uint64_t submit_id);
+  struct Validation {
+    bool ok = false;
+    protocol::ErrorCode code = protocol::ErrorCode::scene_invalid;
+    std::string message;
+    protocol::Halt halt;
+    std::string staging;
+  };
+  void on_validated(std::uint64_t conn, const protocol::Submit& s, Validation v);
+  void reschedule();
+  void start_job(const JobRecord& r);
+  void on_pass(PassUpdate u);
+  void on_finish(WorkerResult r);
+  void update_watched(std::uint64_t job);
+  std::shared_ptr<const FilmSnapshot> latest_snapshot(std::uint64_t job);
+  JobPaths paths(std::uint64_t job) const;
+
+  std::string config_path_;
+  std::function<void(Config&)> overrides_;
+  Log& log_;
+  Config cfg_;
+  EventLoop loop_;
+  SignalFd signals_;
+  std::unique_ptr<tbb::global_control> tbb_limit_;  // caps all render arenas together at --threads
+  std::unique_ptr<JobStore> store_;
+  std::unique_ptr<AssetCache> assets_;
+  std::vector<Listener> listeners_;
+  std::map<std::uint64_t, std::unique_ptr<Connection>> conns_;
+  std::set<std::uint64_t> dirty_;  // connections with output to flush at the end of this turn
+  std::uint64_t next_conn_ = 1;
+  std::uint64_t next_staging_ = 1;
+  TilePublisher publisher_{*this};
+  std::map<std::uint64_t, Active> active_;
+  std::map<std::uint64_t, Memo> memo_;
+  enum class Phase { serving, draining, stopped } phase_ = Phase::serving;
+  int exit_code_ = 0;
+  Background background_;  // last: destroyed first, while the rest still exists
+};
+
+}  // namespace omega::daemon

@@ -1,0 +1,178 @@
+"""Shared helpers for omegad's black-box tests: start a real daemon on a temp Unix socket and a
+free loopback port, talk to it with omega_proto.Client, and compare EXRs with omega_exr_compare.
+Standard library only. Usage of a test: python3 test_x.py OMEGAD OMEGA EXR_COMPARE SOURCE_DIR"""
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "python"))
+import omega_proto as op  # noqa: E402
+
+OMEGAD, OMEGA, EXR_COMPARE, SOURCE_DIR = (sys.argv[1:5] + [None] * 4)[:4]
+
+
+def small_cornell(width=80, height=48, spp=16):
+    """The Cornell box at a small size (the scene's own text, with the film and spp replaced)."""
+    with open(os.path.join(SOURCE_DIR, "scenes", "cornell-box.yaml")) as f:
+        text = f.read()
+    text = re.sub(r"film: \{width: \d+, height: \d+", f"film: {{width: {width}, height: {height}", text)
+    text = re.sub(r"\n  spp: \d+", f"\n  spp: {spp}", text)
+    return text.encode()
+
+
+class Daemon:
+    def __init__(self, workdir, threads=2, config="", state_dir=None, name="omegad"):
+        self.workdir = workdir
+        self.state_dir = state_dir or os.path.join(workdir, "state")
+        self.sock = os.path.join(workdir, name + ".sock")
+        self.config_path = os.path.join(workdir, name + ".yaml")
+        base = "checkpoint_interval_s: 0\ndrain_timeout_s: 20\nlog_level: debug\n"
+        with open(self.config_path, "w") as f:
+            f.write(base + config)
+        self.threads = threads
+        self.lines = []
+        self.lock = threading.Lock()
+        self.proc = None
+        self.tcp = None
+
+    @property
+    def unix(self):
+        return "unix:" + self.sock
+
+    def start(self, timeout=30):
+        self.lines = []
+        args = [OMEGAD, "--config", self.config_path, "--state-dir", self.state_dir,
+                "--listen", self.unix, "--listen", "tcp:127.0.0.1:0", "--threads", str(self.threads)]
+        self.proc = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+        threading.Thread(target=self._pump, args=(self.proc,), daemon=True).start()
+        m = self.wait_log(r"omegad ready: listening on .*tcp:([0-9.]+:\d+)", timeout)
+        self.tcp = "tcp:" + m.group(1)
+        return self
+
+    def _pump(self, proc):
+        for line in proc.stderr:
+            with self.lock:
+                self.lines.append(line.rstrip("\n"))
+            if os.environ.get("OMEGAD_TEST_VERBOSE"):
+                sys.stderr.write("  omegad| " + line)
+
+    def log(self):
+        with self.lock:
+            return "\n".join(self.lines)
+
+    def wait_log(self, pattern, timeout=30, start=0):
+        deadline = time.monotonic() + timeout
+        rx = re.compile(pattern)
+        while time.monotonic() < deadline:
+            with self.lock:
+                for line in self.lines[start:]:
+                    m = rx.search(line)
+                    if m:
+                        return m
+            if self.proc.poll() is not None and not self.proc.stderr.closed:
+                time.sleep(0.2)
+                with self.lock:
+                    if not any(rx.search(l) for l in self.lines[start:]):
+                        raise AssertionError(f"omegad exited ({self.proc.returncode}) before logging /{pattern}/:\n" + self.log())
+            time.sleep(0.05)
+        raise AssertionError(f"omegad did not log /{pattern}/ within {timeout} s:\n" + self.log()[-4000:])
+
+    def client(self, tcp=False, **kw):
+        return op.Client(self.tcp if tcp else self.unix, **kw)
+
+    def kill9(self):
+        self.proc.send_signal(signal.SIGKILL)
+        self.proc.wait(10)
+
+    def terminate(self, timeout=30):
+        self.proc.send_signal(signal.SIGTERM)
+        return self.proc.wait(timeout)
+
+    def stop(self):
+        if self.proc and self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGKILL)
+            self.proc.wait(10)
+
+
+def local_render(scene_bytes, out, spp, seed=0, workdir=None):
+    path = os.path.join(workdir, "local-scene.yaml")
+    with open(path, "wb") as f:
+        f.write(scene_bytes)
+    subprocess.run([OMEGA, "render", path, "--spp", str(spp), "--seed", str(seed), "-o", out, "--threads", "2", "-q"],
+                   check=True, timeout=120, stdout=subprocess.DEVNULL)
+
+
+def exr_equal(full, part):
+    r = subprocess.run([EXR_COMPARE, full, part], capture_output=True, text=True, timeout=60)
+    if r.returncode != 0:
+        sys.stderr.write(r.stderr)
+    return r.returncode == 0
+
+
+def wait_state(c, job, states, timeout=60):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        h = c.job("status", job)
+        assert h["type"] == "job_info", h
+        if h["state"] in states:
+            return h
+        time.sleep(0.05)
+    raise AssertionError(f"job {job} did not reach {states} in {timeout} s (last: {h})")
+
+
+def watch(c, job, timeout=120):
+    """Subscribes and collects frames until done. Returns (tiles by rect, progress list, done)."""
+    sid = c.new_id()
+    c.send(op.job_request("subscribe", sid, job))
+    h, _ = c.recv_for(sid)
+    assert h["type"] == "ok", h
+    tiles, progress = {}, []
+    deadline = time.monotonic() + timeout
+    while True:
+        h, p = c.recv_for(sid, timeout=max(0.1, deadline - time.monotonic()))
+        if h["type"] == "tile":
+            key = tuple(h["rect"])
+            if key not in tiles or tiles[key][0]["version"] <= h["version"]:
+                tiles[key] = (h, p)
+        elif h["type"] == "progress":
+            progress.append(h)
+        elif h["type"] == "done":
+            return tiles, progress, h
+        else:
+            raise AssertionError(f"unexpected frame {h}")
+
+
+class Test:
+    """Runs named test functions in order with a fresh temp dir each; prints a summary."""
+
+    def __init__(self):
+        self.failures = 0
+
+    def run(self, fn):
+        tmp = tempfile.mkdtemp(prefix="omegad-test-")
+        t0 = time.monotonic()
+        daemons = []
+        try:
+            fn(tmp, daemons)
+            print(f"PASS {fn.__name__} ({time.monotonic() - t0:.1f} s)", flush=True)
+        except Exception:
+            import traceback
+            self.failures += 1
+            print(f"FAIL {fn.__name__}", flush=True)
+            traceback.print_exc()
+            for d in daemons:
+                print("---- omegad log ----\n" + d.log()[-6000:], flush=True)
+        finally:
+            for d in daemons:
+                d.stop()
+            shutil.rmtree(tmp, ignore_errors=True)
+
+    def exit(self):
+        sys.exit(1 if self.failures else 0)

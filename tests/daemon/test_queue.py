@@ -1,0 +1,115 @@
+"""The durable queue: priorities (with preemption), FIFO among equals, pause, resume, cancel,
+re-prioritising, permissions and invalid states. A preempted or paused job resumes from its last
+pass boundary and still ends bit-identical to an uninterrupted local render."""
+import os
+import re
+import time
+
+from harness import Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state, watch
+
+
+def log_index(d, pattern):
+    for i, line in enumerate(d.log().splitlines()):
+        if re.search(pattern, line):
+            return i
+    raise AssertionError(f"no /{pattern}/ in the log")
+
+
+def wait_spp(c, job, at_least, timeout=60):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        h = c.job("status", job)
+        if h["progress"]["spp"] >= at_least:
+            return h
+        time.sleep(0.05)
+    raise AssertionError(f"job {job} stuck below {at_least} spp")
+
+
+def test_priorities_preemption_fifo(tmp, daemons):
+    scene = small_cornell(width=64, height=48)
+    local = os.path.join(tmp, "local.exr")
+    local_render(scene, local, 160, 3, tmp)
+    d = Daemon(tmp, config="max_running: 1\n").start()
+    daemons.append(d)
+    c = d.client()
+    a = c.submit(scene, name="a", seed=3, halt_=op.halt(spp=160))["job"]
+    wait_spp(c, a, 1)
+    b = c.submit(scene, name="b", halt_=op.halt(spp=4))["job"]
+    hi = c.submit(scene, name="hi", priority=5, halt_=op.halt(spp=4))["job"]
+    wait_state(c, hi, {"done"})
+    assert c.job("status", a)["state"] in ("queued", "running")
+    wait_state(c, b, {"done"})
+    wait_state(c, a, {"done"})
+    # hi preempted a; then a (older) ran before b (same priority, FIFO).
+    assert log_index(d, rf"job {a}: preempted") < log_index(d, rf"job {hi}: started")
+    assert log_index(d, rf"job {hi}: done") < log_index(d, rf"job {a}: done") < log_index(d, rf"job {b}: started")
+    info = c.job("status", a)
+    assert info["progress"]["spp"] == 160, info
+    f = c.job("fetch", a)
+    with open(os.path.join(tmp, "a.exr"), "wb") as out:
+        out.write(f["_payload"])
+    assert exr_equal(local, os.path.join(tmp, "a.exr")), "a preempted job differs from an uninterrupted render"
+
+
+def test_pause_resume_cancel_priority(tmp, daemons):
+    scene = small_cornell(width=64, height=48)
+    d = Daemon(tmp, config="max_running: 1\n").start()
+    daemons.append(d)
+    c = d.client()
+    run = c.submit(scene, name="run", halt_=op.halt(spp=100000))["job"]
+    q1 = c.submit(scene, name="q1", halt_=op.halt(spp=2))["job"]
+    q2 = c.submit(scene, name="q2", halt_=op.halt(spp=2))["job"]
+    wait_spp(c, run, 1)
+    # Queued jobs: pause, re-prioritise, cancel.
+    assert c.job("pause", q1)["type"] == "ok"
+    assert c.job("status", q1)["state"] == "paused"
+    assert c.request(lambda id: op.set_priority(id, q2, 7))["type"] == "ok"
+    assert c.job("status", q2)["priority"] == 7
+    assert c.job("cancel", q2)["type"] == "ok"
+    assert c.job("status", q2)["state"] == "cancelled"
+    h = c.job("resume", run)
+    assert h["type"] == "error" and h["code"] == "invalid_state", h
+    h = c.job("cancel", 999)
+    assert h["code"] == "unknown_job", h
+    # Another user (TCP is anonymous, not the owner) may look but not touch.
+    t = d.client(tcp=True)
+    h = t.job("pause", run)
+    assert h["type"] == "error" and h["code"] == "permission_denied", h
+    assert t.job("status", run)["type"] == "job_info"
+    # Pause a running job: it stops within a tile's time and keeps its samples.
+    t0 = time.monotonic()
+    assert c.job("pause", run)["type"] == "ok"
+    d.wait_log(rf"job {run}: stopped \(pause\)", timeout=10)
+    stop_s = time.monotonic() - t0
+    spp = c.job("status", run)["progress"]["spp"]
+    time.sleep(0.5)
+    assert c.job("status", run)["progress"]["spp"] == spp and c.job("status", run)["state"] == "paused"
+    # Resume it; then cancel it while running: a subscriber sees done (cancelled).
+    assert c.job("resume", run)["type"] == "ok"
+    wait_state(c, run, {"running"})
+    wait_spp(c, run, spp + 1)
+    w = d.client()
+    sid = w.new_id()
+    w.send(op.job_request("subscribe", sid, run))
+    t0 = time.monotonic()
+    assert c.job("cancel", run)["type"] == "ok"
+    while True:
+        h, _ = w.recv_for(sid)
+        if h["type"] == "done":
+            break
+    assert h["state"] == "cancelled", h
+    d.wait_log(rf"job {run}: stopped \(cancel\)", timeout=10)
+    cancel_s = time.monotonic() - t0
+    print(f"  pause took effect in {stop_s * 1000:.0f} ms, cancel in {cancel_s * 1000:.0f} ms")
+    # The paused queued job resumes and finishes.
+    assert c.job("resume", q1)["type"] == "ok"
+    wait_state(c, q1, {"done"})
+    h = c.job("pause", q1)
+    assert h["code"] == "invalid_state", h
+
+
+if __name__ == "__main__":
+    t = Test()
+    t.run(test_priorities_preemption_fifo)
+    t.run(test_pause_resume_cancel_priority)
+    t.exit()

@@ -1,0 +1,107 @@
+"""Submit, stream and fetch: the streamed tiles and the fetched image equal, bit for bit, a local
+`omega render` of the same scene with the same seed and spp. Over the Unix socket and TCP; a scene
+with a mesh asset (sent once, then cached); a subscriber that joins after the end."""
+import hashlib
+import os
+
+from harness import Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state, watch
+
+SPP, SEED = 12, 7
+TRI_OBJ = b"v -0.5 0.2 -0.5\nv 0.5 0.2 -0.5\nv 0 1.2 0\nf 1 2 3\n"
+
+
+def write(path, data):
+    with open(path, "wb") as f:
+        f.write(data)
+
+
+def check_job(tmp, c, job, local, label):
+    tiles, progress, done = watch(c, job)
+    assert done["state"] == "done", done
+    assert done["progress"]["spp"] == SPP, done
+    assert tiles, "no tiles streamed"
+    for (rect, (h, payload)) in tiles.items():
+        assert h["spp"] == SPP, f"latest tile {rect} has spp {h['spp']}"
+        p = os.path.join(tmp, f"{label}-tile-{'-'.join(map(str, rect))}.exr")
+        write(p, payload)
+        assert exr_equal(local, p), f"tile {rect} differs from the local render"
+    fetched = c.job("fetch", job)
+    assert fetched["type"] == "image", fetched
+    assert fetched["spp"] == SPP and fetched["width"] == 80 and fetched["height"] == 48, fetched
+    p = os.path.join(tmp, f"{label}-fetched.exr")
+    write(p, fetched["_payload"])
+    assert exr_equal(local, p) and exr_equal(p, local), "fetched image differs from the local render"
+    return tiles
+
+
+def test_stream_and_fetch_equal_local_render(tmp, daemons):
+    scene = small_cornell()
+    local = os.path.join(tmp, "local.exr")
+    local_render(scene, local, SPP, SEED, tmp)
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    for tcp in (False, True):
+        c = d.client(tcp=tcp)
+        assert c.welcome[0]["type"] == "welcome", c.welcome
+        if not tcp:
+            assert c.welcome[0]["auth"] == "peer" and c.welcome[0]["user"] == str(os.getuid())
+        a = c.submit(scene, name="cornell", seed=SEED, halt_=op.halt(spp=SPP))
+        assert a["type"] == "accepted", a
+        tiles = check_job(tmp, c, a["job"], local, "tcp" if tcp else "unix")
+        assert len(tiles) == 6, sorted(tiles)  # 80x48 in 32-pixel tiles: 3 x 2, edges clipped
+        info = wait_state(c, a["job"], {"done"})
+        assert info["progress"]["spp"] == SPP and info["owner"] == (str(os.getuid()) if not tcp else "tcp")
+        c.close()
+    assert "job 2: done" in d.log()
+
+
+def test_mesh_asset_cached_and_late_subscriber(tmp, daemons):
+    scene = small_cornell().replace(
+        b"shapes:\n", b"shapes:\n  - {type: mesh, file: meshes/tri.obj, material: FloorBSDF}\n", 1)
+    scene_dir = os.path.join(tmp, "scene")
+    os.makedirs(os.path.join(scene_dir, "meshes"))
+    write(os.path.join(scene_dir, "meshes", "tri.obj"), TRI_OBJ)
+    write(os.path.join(scene_dir, "scene.yaml"), scene)
+    local = os.path.join(tmp, "local.exr")
+    local_render(scene, local, SPP, SEED, scene_dir)
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    c = d.client()
+    assets = [("meshes/tri.obj", TRI_OBJ)]
+    sid = c.new_id()
+    c.send(op.submit(sid, scene, name="tri", seed=SEED, halt_=op.halt(spp=SPP), assets=assets))
+    h, _ = c.recv_for(sid)
+    assert h["type"] == "need_assets" and h["missing"] == [hashlib.sha256(TRI_OBJ).hexdigest()], h
+    c.send(op.asset(sid, TRI_OBJ))
+    h, _ = c.recv_for(sid)
+    assert h["type"] == "accepted", h
+    job = h["job"]
+    wait_state(c, job, {"done"})
+    # A late subscriber gets every tile's final state, then done.
+    check_job(tmp, c, job, local, "late")
+    # The asset is cached: a second submit needs nothing.
+    sid = c.new_id()
+    c.send(op.submit(sid, scene, name="tri2", seed=SEED, halt_=op.halt(spp=SPP), assets=assets))
+    h, _ = c.recv_for(sid)
+    assert h["type"] == "need_assets" and h["missing"] == [], h
+    h, _ = c.recv_for(sid)
+    assert h["type"] == "accepted", h
+    wait_state(c, h["job"], {"done"})
+    # The result stays fetchable after a restart, until deleted.
+    d.terminate()
+    d.start()
+    c = d.client()
+    f = c.job("fetch", job)
+    assert f["type"] == "image", f
+    write(os.path.join(tmp, "after.exr"), f["_payload"])
+    assert exr_equal(local, os.path.join(tmp, "after.exr"))
+    assert c.job("delete", job)["type"] == "ok"
+    f = c.job("fetch", job)
+    assert f["type"] == "error" and f["code"] == "unknown_job", f
+
+
+if __name__ == "__main__":
+    t = Test()
+    t.run(test_stream_and_fetch_equal_local_render)
+    t.run(test_mesh_asset_cached_and_late_subscriber)
+    t.exit()

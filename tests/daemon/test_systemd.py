@@ -1,0 +1,64 @@
+"""systemd: `systemd-analyze verify` passes on the units (with ExecStart pointing at the built
+omegad, since /usr/bin/omegad is not installed here), and omegad started through
+systemd-socket-activate serves on the socket it was handed. Skipped, with a message, when the
+tools are absent."""
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+from harness import OMEGAD, Daemon, Test, op, small_cornell, wait_state
+
+UNITS = sys.argv[5] if len(sys.argv) > 5 else None
+
+
+def test_units_verify(tmp, daemons):
+    tool = shutil.which("systemd-analyze")
+    if not tool:
+        print("SKIP test_units_verify: systemd-analyze is not installed")
+        return
+    for name in ("omegad.service", "omegad.socket"):
+        with open(os.path.join(UNITS, name)) as f:
+            text = f.read().replace("/usr/bin/omegad", OMEGAD)
+        with open(os.path.join(tmp, name), "w") as f:
+            f.write(text)
+    r = subprocess.run([tool, "verify", os.path.join(tmp, "omegad.service"), os.path.join(tmp, "omegad.socket")],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stdout + r.stderr
+    text = open(os.path.join(UNITS, "omegad.service")).read()
+    for key in ("Type=notify", "WatchdogSec=", "StateDirectory=omega", "RuntimeDirectory=omega", "NoNewPrivileges=yes",
+                "ProtectSystem=strict", "User=omega"):
+        assert key in text, key
+
+
+def test_socket_activation(tmp, daemons):
+    tool = shutil.which("systemd-socket-activate")
+    if not tool:
+        print("SKIP test_socket_activation: systemd-socket-activate is not installed")
+        return
+    d = Daemon(tmp)
+    daemons.append(d)
+    sock = os.path.join(tmp, "activated.sock")
+    # systemd-socket-activate listens, and starts omegad on the first connection with the socket as fd 3.
+    args = [tool, "-l", sock, OMEGAD, "--config", d.config_path, "--state-dir", d.state_dir, "--threads", "2"]
+    d.proc = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    import threading
+    threading.Thread(target=d._pump, args=(d.proc,), daemon=True).start()
+    deadline = time.monotonic() + 20
+    while not os.path.exists(sock):
+        assert time.monotonic() < deadline, "systemd-socket-activate did not create the socket"
+        time.sleep(0.05)
+    c = op.Client("unix:" + sock)
+    assert c.welcome[0]["type"] == "welcome"
+    d.wait_log(r"omegad ready: listening on unix:.*activated.sock \(systemd\)")
+    h = c.submit(small_cornell(width=32, height=32), name="activated", halt_=op.halt(spp=2))
+    assert h["type"] == "accepted", h
+    wait_state(c, h["job"], {"done"})
+
+
+if __name__ == "__main__":
+    t = Test()
+    t.run(test_units_verify)
+    t.run(test_socket_activation)
+    t.exit()
