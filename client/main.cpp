@@ -5,6 +5,8 @@
 
 #include <exception>
 
+#include "converge_command.h"
+#include "import_command.h"
 #include "render_command.h"
 
 int main(int argc, char** argv) {
@@ -12,6 +14,12 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     omega::RenderArgs render;
     omega::add_render_command(app, render);
+    omega::ImportArgs import_args;
+    omega::add_import_command(app, import_args);
+    omega::ConvergeArgs converge;
+    omega::add_converge_command(app, converge);
+    omega::CompareArgs compare;
+    omega::add_compare_command(app, compare);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -20,6 +28,9 @@ int main(int argc, char** argv) {
     }
     try {
         if (app.got_subcommand("render")) return omega::run_render(render);
+        if (app.got_subcommand("import")) return omega::run_import(import_args);
+        if (app.got_subcommand("converge")) return omega::run_converge(converge);
+        if (app.got_subcommand("compare")) return omega::run_compare(compare);
     } catch (const std::exception& e) {
         fmt::print(stderr, "omega: internal error: {}\n", e.what());
         return 1;
