@@ -27,6 +27,7 @@ struct ConvergeArgs {
 
 struct CompareArgs {
     std::string image, reference;
+    std::string filter = "tent";
 };
 
 void add_converge_command(CLI::App& app, ConvergeArgs& args);
