@@ -19,7 +19,7 @@ struct Result {
     std::string output;  // stdout and stderr
 };
 
-Result omega(const std::string& args) {
+Result run_omega(const std::string& args) {
     std::string cmd = std::string(OMEGA_BIN) + " " + args + " 2>&1";
     Result r;
     FILE* p = popen(cmd.c_str(), "r");
@@ -75,11 +75,11 @@ protected:
 }  // namespace
 
 TEST_F(MitsubaCli, ImportedYamlRendersTheSameImageAsTheXml) {
-    Result imp = omega("import " + xml_ + " -o " + path("scene.yaml"));
+    Result imp = run_omega("import " + xml_ + " -o " + path("scene.yaml"));
     ASSERT_EQ(imp.code, 0) << imp.output;
-    Result a = omega("render " + xml_ + " -q --spp 2 -o " + path("a.exr"));
+    Result a = run_omega("render " + xml_ + " -q --spp 2 -o " + path("a.exr"));
     ASSERT_EQ(a.code, 0) << a.output;
-    Result b = omega("render " + path("scene.yaml") + " -q --spp 2 -o " + path("b.exr"));
+    Result b = run_omega("render " + path("scene.yaml") + " -q --spp 2 -o " + path("b.exr"));
     ASSERT_EQ(b.code, 0) << b.output;
     omega::ExrImage ia = omega::read_exr(path("a.exr")), ib = omega::read_exr(path("b.exr"));
     EXPECT_EQ(ia.width, 16);
@@ -90,10 +90,10 @@ TEST_F(MitsubaCli, ImportedYamlRendersTheSameImageAsTheXml) {
 }
 
 TEST_F(MitsubaCli, DefinesOverrideDefaults) {
-    Result r = omega("render " + xml_ + " -q --spp 1 -D res=8 -o " + path("a.exr"));
+    Result r = run_omega("render " + xml_ + " -q --spp 1 -D res=8 -o " + path("a.exr"));
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_EQ(omega::read_exr(path("a.exr")).width, 8);
-    Result bad = omega("render " + xml_ + " -q --spp 1 -D res -o " + path("a.exr"));
+    Result bad = run_omega("render " + xml_ + " -q --spp 1 -D res -o " + path("a.exr"));
     EXPECT_EQ(bad.code, 2);
     EXPECT_NE(bad.output.find("-D res: expected name=value"), std::string::npos) << bad.output;
 }
@@ -101,14 +101,14 @@ TEST_F(MitsubaCli, DefinesOverrideDefaults) {
 TEST_F(MitsubaCli, BadXmlIsExitCode2WithFileAndLine) {
     std::string bad = write("bad.xml", "<scene version=\"3.0.0\">\n<shape type=\"cube\">\n</scene>\n");
     for (const char* cmd : {"render ", "import "}) {
-        Result r = omega(cmd + bad);
+        Result r = run_omega(cmd + bad);
         EXPECT_EQ(r.code, 2) << r.output;
         EXPECT_NE(r.output.find("bad.xml:3: invalid XML"), std::string::npos) << r.output;
     }
 }
 
 TEST_F(MitsubaCli, ConvergeMeasuresPathAndReportsRefusedIntegrators) {
-    Result r = omega("converge " + xml_ + " --integrators path,bdpt --budget 2 --runs 2 --reference-time 1 --threads 1 --out-dir " +
+    Result r = run_omega("converge " + xml_ + " --integrators path,bdpt --budget 2 --runs 2 --reference-time 1 --threads 1 --out-dir " +
                      path("conv"));
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_NE(r.output.find("no --reference: rendering one with the path tracer"), std::string::npos) << r.output;
@@ -124,11 +124,13 @@ TEST_F(MitsubaCli, ConvergeMeasuresPathAndReportsRefusedIntegrators) {
     EXPECT_EQ(row2.rfind("2,2,", 0), 0u) << row2;
     EXPECT_TRUE(fs::exists(path("conv/path_runs.csv")));
     EXPECT_TRUE(fs::exists(path("conv/convergence.gp")));
-    if (std::system("command -v gnuplot > /dev/null 2>&1") == 0) EXPECT_TRUE(fs::exists(path("conv/convergence.png")));
+    if (std::system("command -v gnuplot > /dev/null 2>&1") == 0) {
+        EXPECT_TRUE(fs::exists(path("conv/convergence.png")));
+    }
 }
 
 TEST_F(MitsubaCli, ConvergeWithOnlyRefusedIntegratorsIsExitCode2) {
-    Result r = omega("converge " + xml_ + " --integrators light --budget 1 --runs 1 --reference-time 1 --threads 1 --out-dir " +
+    Result r = run_omega("converge " + xml_ + " --integrators light --budget 1 --runs 1 --reference-time 1 --threads 1 --out-dir " +
                      path("conv"));
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("integrator 'light' is not available"), std::string::npos) << r.output;
