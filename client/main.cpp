@@ -7,6 +7,8 @@
 
 #include "batch_command.h"
 #include "job_commands.h"
+#include "converge_command.h"
+#include "import_command.h"
 #include "render_command.h"
 #include "submit_command.h"
 
@@ -21,6 +23,12 @@ int main(int argc, char** argv) {
     omega::client::add_job_commands(app, jobs);
     omega::client::BatchArgs batch;
     omega::client::add_batch_command(app, batch);
+    omega::ImportArgs import_args;
+    omega::add_import_command(app, import_args);
+    omega::ConvergeArgs converge;
+    omega::add_converge_command(app, converge);
+    omega::CompareArgs compare;
+    omega::add_compare_command(app, compare);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -32,6 +40,9 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("submit")) return omega::client::run_submit(submit);
         if (app.got_subcommand("batch")) return omega::client::run_batch(batch);
         if (int rc = omega::client::run_job_command(app, jobs); rc >= 0) return rc;
+        if (app.got_subcommand("import")) return omega::run_import(import_args);
+        if (app.got_subcommand("converge")) return omega::run_converge(converge);
+        if (app.got_subcommand("compare")) return omega::run_compare(compare);
     } catch (const std::exception& e) {
         fmt::print(stderr, "omega: internal error: {}\n", e.what());
         return 1;

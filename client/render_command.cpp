@@ -8,10 +8,12 @@
 #include <stdexcept>
 
 #include "film/film.h"
+#include "import_command.h"
 #include "integrator/render_session.h"
 #include "progress_bar.h"
 #include "scene/scene.h"
 #include "scene/scene_error.h"
+#include "scene/mitsuba_importer.h"
 #include "scene/scene_parser.h"
 
 namespace omega {
@@ -42,7 +44,7 @@ std::string human_rate(double v) {
 
 void add_render_command(CLI::App& app, RenderArgs& a) {
     auto* cmd = app.add_subcommand("render", "Render a scene locally to an EXR file");
-    cmd->add_option("scene", a.scene, "Scene file (YAML, format v1)")->required();
+    cmd->add_option("scene", a.scene, "Scene file (YAML format v1, or Mitsuba XML: *.xml)")->required();
     cmd->add_option("-o,--output", a.output, "Output EXR (default: the scene's name with .exr)");
     auto* spp = cmd->add_option("--spp", a.spp, "Samples per pixel")->check(CLI::PositiveNumber);
     auto* time = cmd->add_option("--time", a.time_s, "Render for this many seconds")->check(CLI::PositiveNumber);
@@ -56,13 +58,16 @@ void add_render_command(CLI::App& app, RenderArgs& a) {
     cmd->add_option("--seed", a.seed, "Random seed (default 0)");
     cmd->add_option("--report", a.report_csv, "Write one CSV row per pass to this file");
     cmd->add_flag("-q,--quiet", a.quiet, "No progress output");
+    cmd->add_option("-D,--define", a.defines, "Mitsuba XML scenes: set a <default> variable, name=value (repeatable)");
 }
 
 int run_render(const RenderArgs& a) {
     SceneDesc desc;
     std::unique_ptr<Scene> scene;
+    MitsubaOptions xml;
+    if (!parse_defines(a.defines, xml.defines)) return 2;
     try {
-        desc = parse_scene_file(a.scene);
+        desc = load_scene_file(a.scene, xml);
         if (a.integrator == "path") desc.integrator.type = IntegratorType::Path;
         if (a.integrator == "light") desc.integrator.type = IntegratorType::Light;
         if (a.integrator == "bdpt") desc.integrator.type = IntegratorType::Bdpt;

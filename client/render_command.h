@@ -4,6 +4,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace omega {
 
@@ -18,6 +19,7 @@ struct RenderArgs {
     uint64_t seed = 0;
     std::string report_csv;
     bool quiet = false;
+    std::vector<std::string> defines;  // -D name=value, for Mitsuba XML scenes
 };
 
 void add_render_command(CLI::App& app, RenderArgs& args);

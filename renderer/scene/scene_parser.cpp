@@ -503,6 +503,26 @@ SceneDesc parse_root(const YAML::Node& root, const std::string& file, const fs::
 
 }  // namespace
 
+IntegratorDesc parse_integrator_value(const ParamValue& v) {
+    IntegratorDesc it;
+    parse_integrator(ParamBag(v), it);
+    return it;
+}
+
+SensorDesc parse_sensor_value(const ParamValue& v) {
+    SensorDesc s;
+    parse_sensor(ParamBag(v), s);
+    return s;
+}
+
+MaterialDesc parse_material_value(const ParamValue& v, const std::string& name, std::vector<std::string>& warnings) {
+    return parse_material(v, name, warnings);
+}
+
+EmitterDesc parse_emitter_value(const ParamValue& v) { return parse_emitter(ParamBag(v)); }
+
+LightDesc parse_light_value(const ParamValue& v) { return parse_light(v); }
+
 SceneDesc parse_scene_string(const std::string& yaml, const std::string& virtual_path) {
     YAML::Node root;
     try {

@@ -19,4 +19,12 @@ SceneDesc parse_scene_string(const std::string& yaml, const std::string& virtual
 // finite, affine and invertible.
 Mat4 parse_to_world(const ParamValue& v);
 
+// The section parsers, for importers that build a YAML value per entity (e.g. the Mitsuba XML
+// importer): the same keys, defaults and checks as in a v1 file, and the same error messages.
+IntegratorDesc parse_integrator_value(const ParamValue& v);
+SensorDesc parse_sensor_value(const ParamValue& v);  // includes film and halt keys
+MaterialDesc parse_material_value(const ParamValue& v, const std::string& name, std::vector<std::string>& warnings);
+EmitterDesc parse_emitter_value(const ParamValue& v);
+LightDesc parse_light_value(const ParamValue& v);
+
 }  // namespace omega

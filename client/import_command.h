@@ -1,0 +1,23 @@
+#pragma once
+// `omega import SCENE.xml [-o SCENE.yaml] [-D name=value]...`: Mitsuba XML -> scene format v1.
+#include <CLI/CLI.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace omega {
+
+struct ImportArgs {
+    std::string scene;
+    std::string output;
+    std::vector<std::string> defines;  // name=value
+};
+
+void add_import_command(CLI::App& app, ImportArgs& args);
+int run_import(const ImportArgs& args);
+
+// "name=value" strings -> map; a malformed one is reported on stderr and returns false.
+bool parse_defines(const std::vector<std::string>& in, std::map<std::string, std::string>& out);
+
+}  // namespace omega

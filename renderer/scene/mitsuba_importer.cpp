@@ -1,0 +1,1012 @@
+#include "scene/mitsuba_importer.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <fmt/format.h>
+#include <pugixml.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <set>
+#include <sstream>
+
+#include "scene/param_bag.h"
+#include "scene/scene_parser.h"
+
+namespace omega {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Mitsuba 0.x spelled parameters in camelCase (toWorld, maxDepth, intIOR); 3.x uses snake_case.
+std::string snake_case(const std::string& s) {
+    std::string out;
+    for (size_t i = 0; i < s.size(); ++i) {
+        char c = s[i];
+        if (std::isupper(static_cast<unsigned char>(c))) {
+            bool prev_upper = i > 0 && std::isupper(static_cast<unsigned char>(s[i - 1]));
+            if (i > 0 && !prev_upper) out += '_';
+            out += char(std::tolower(static_cast<unsigned char>(c)));
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
+
+std::vector<std::string> split_numbers(const std::string& s) {
+    std::vector<std::string> out;
+    std::string cur;
+    for (char c : s) {
+        if (c == ',' || std::isspace(static_cast<unsigned char>(c))) {
+            if (!cur.empty()) out.push_back(cur);
+            cur.clear();
+        } else {
+            cur += c;
+        }
+    }
+    if (!cur.empty()) out.push_back(cur);
+    return out;
+}
+
+float srgb_to_linear(float v) {
+    return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+// An XML element being read: which of its children were used, so the rest can be named.
+struct Elem {
+    pugi::xml_node node;
+    std::string key;  // for messages: "shape(Floor)", "sensor.film"
+    std::set<size_t> used;  // offsets of the children used
+    void use(pugi::xml_node c) { used.insert(size_t(c.offset_debug())); }
+};
+
+class Importer {
+public:
+    Importer(const std::string& text, const std::string& file, const MitsubaOptions& opt)
+        : text_(text), file_(file), fname_(std::make_shared<const std::string>(file)), opt_(opt) {
+        for (size_t i = 0; i < text_.size(); ++i)
+            if (text_[i] == '\n') newlines_.push_back(i);
+        dir_ = fs::path(file).parent_path();
+        if (dir_.empty()) dir_ = ".";
+    }
+
+    SceneDesc run();
+
+private:
+    // ---- positions, messages
+    int line_of(pugi::xml_node n) const {
+        ptrdiff_t off = n.offset_debug();
+        if (off < 0) return 0;
+        return int(std::upper_bound(newlines_.begin(), newlines_.end(), size_t(off)) - newlines_.begin()) + 1;
+    }
+    int line_at(size_t offset) const {
+        return int(std::upper_bound(newlines_.begin(), newlines_.end(), offset) - newlines_.begin()) + 1;
+    }
+    [[noreturn]] void fail(pugi::xml_node n, const std::string& key, const std::string& what) const {
+        throw SceneError(fmt::format("{}:{}: {}: {}", file_, line_of(n), key, what));
+    }
+    void warn(pugi::xml_node n, const std::string& key, const std::string& what) {
+        desc_.warnings.push_back(fmt::format("{}:{}: {}: {}", file_, line_of(n), key, what));
+    }
+
+    // ---- attributes and $variables
+    std::string subst(const std::string& s, pugi::xml_node n, const std::string& key) const {
+        std::string out;
+        for (size_t i = 0; i < s.size(); ++i) {
+            if (s[i] != '$') {
+                out += s[i];
+                continue;
+            }
+            size_t j = i + 1;
+            while (j < s.size() && (std::isalnum(static_cast<unsigned char>(s[j])) || s[j] == '_')) ++j;
+            std::string var = s.substr(i + 1, j - i - 1);
+            if (var.empty()) fail(n, key, "a lone '$' in '" + s + "'");
+            auto it = vars_.find(var);
+            if (it == vars_.end())
+                fail(n, key, "undefined variable $" + var + " (add <default name=\"" + var + "\" value=\"...\"/>)");
+            out += it->second;
+            i = j - 1;
+        }
+        return out;
+    }
+    std::string attr(pugi::xml_node n, const char* name, const std::string& key) const {
+        return subst(n.attribute(name).as_string(), n, key);
+    }
+    std::string required_attr(pugi::xml_node n, const char* name, const std::string& key) const {
+        if (!n.attribute(name)) fail(n, key, fmt::format("<{}> needs a '{}' attribute", n.name(), name));
+        return attr(n, name, key);
+    }
+    std::string param_name(pugi::xml_node c, const std::string& key) const {
+        std::string name = attr(c, "name", key);
+        return legacy_ ? snake_case(name) : name;
+    }
+    std::string elem_key(pugi::xml_node n, const std::string& tag, size_t index) const {
+        std::string id = n.attribute("id") ? attr(n, "id", tag) : "";
+        return id.empty() ? fmt::format("{}[{}]", tag, index) : fmt::format("{}({})", tag, id);
+    }
+
+    // ---- parameters
+    static bool is_value_tag(const std::string& t) {
+        return t == "float" || t == "integer" || t == "boolean" || t == "string" || t == "rgb" || t == "srgb" ||
+               t == "spectrum" || t == "point" || t == "vector" || t == "transform";
+    }
+    // The child <tag name="name"> of e (any value tag, or a texture/ref for colours), marked used.
+    pugi::xml_node find_param(Elem& e, const std::string& name) {
+        for (pugi::xml_node c : e.node.children()) {
+            if (c.type() != pugi::node_element || !c.attribute("name")) continue;
+            if (param_name(c, e.key) == name) {
+                e.use(c);
+                return c;
+            }
+        }
+        return {};
+    }
+    double number(pugi::xml_node c, const std::string& key) const {
+        std::string s = attr(c, "value", key);
+        double v = 0;
+        const char* b = s.data();
+        if (!s.empty() && s[0] == '+') ++b;
+        auto [end, ec] = std::from_chars(b, s.data() + s.size(), v);
+        if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v))
+            fail(c, key, "expected a finite number, got '" + s + "'");
+        return v;
+    }
+    // A scalar value as YAML text, checked by the section parsers later.
+    YAML::Node scalar(pugi::xml_node c, const std::string& key) const {
+        std::string t = c.name();
+        std::string v = attr(c, "value", key);
+        if (t == "boolean") {
+            std::string l = v;
+            for (char& ch : l) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+            if (l != "true" && l != "false") fail(c, key, "expected true or false, got '" + v + "'");
+            return YAML::Node(l);
+        }
+        return YAML::Node(v);
+    }
+    Vec3d vec3(pugi::xml_node c, const std::string& key) const {
+        if (c.attribute("value")) {
+            auto parts = split_numbers(attr(c, "value", key));
+            if (parts.size() == 1) parts = {parts[0], parts[0], parts[0]};
+            if (parts.size() != 3) fail(c, key, "expected 3 numbers");
+            Vec3d v;
+            for (int i = 0; i < 3; ++i) v[i] = to_double(parts[size_t(i)], c, key);
+            return v;
+        }
+        return {c.attribute("x") ? to_double(attr(c, "x", key), c, key) : 0.0,
+                c.attribute("y") ? to_double(attr(c, "y", key), c, key) : 0.0,
+                c.attribute("z") ? to_double(attr(c, "z", key), c, key) : 0.0};
+    }
+    double to_double(const std::string& s, pugi::xml_node c, const std::string& key) const {
+        double v = 0;
+        const char* b = s.data();
+        if (!s.empty() && s[0] == '+') ++b;
+        auto [end, ec] = std::from_chars(b, s.data() + s.size(), v);
+        if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v))
+            fail(c, key, "expected a finite number, got '" + s + "'");
+        return v;
+    }
+    static YAML::Node list3(const std::string& a, const std::string& b, const std::string& c) {
+        YAML::Node n(YAML::NodeType::Sequence);
+        n.push_back(a);
+        n.push_back(b);
+        n.push_back(c);
+        return n;
+    }
+    static YAML::Node vec_node(const Vec3d& v) {
+        return list3(fmt::format("{}", v.x), fmt::format("{}", v.y), fmt::format("{}", v.z));
+    }
+    // A colour parameter (<rgb>, <srgb>, <spectrum>, <float>, a bitmap <texture> or a <ref> to one)
+    // as YAML: a number or [r, g, b].
+    YAML::Node colour(pugi::xml_node c, const std::string& key);
+    Rgb texture_average(pugi::xml_node tex, const std::string& key);
+
+    // ---- transforms
+    YAML::Node transform_ops(pugi::xml_node t, const std::string& key);
+    Mat4 to_world(pugi::xml_node t, const std::string& key) {
+        YAML::Node ops = transform_ops(t, key);
+        if (ops.size() == 0) return Mat4{};
+        return parse_to_world(ParamValue(ops, key, fname_, line_of(t)));
+    }
+
+    // Runs a section parser on a YAML value built from element e, and moves the line of an error
+    // about one parameter to that parameter's XML line.
+    template <class F>
+    auto checked(const std::string& key, pugi::xml_node n, const std::map<std::string, int>& lines, F&& f)
+        -> decltype(f(std::declval<ParamValue>())) {
+        try {
+            return f(ParamValue(YAML::Node(), key, fname_, line_of(n)));
+        } catch (const SceneError& err) {
+            std::string msg = err.what();
+            std::string prefix = fmt::format("{}:{}: {}.", file_, line_of(n), key);
+            if (msg.rfind(prefix, 0) == 0) {
+                std::string rest = msg.substr(prefix.size());
+                size_t end = rest.find_first_of(".:[");
+                auto it = lines.find(rest.substr(0, end));
+                if (it != lines.end())
+                    throw SceneError(fmt::format("{}:{}: {}.{}", file_, it->second, key, rest));
+            }
+            throw;
+        }
+    }
+    void warn_unused(Elem& e, const std::string& what = "parameter");
+
+    // ---- sections
+    void read_defaults(pugi::xml_node scene);
+    void read_integrator(pugi::xml_node n);
+    void read_sensor(pugi::xml_node n);
+    YAML::Node read_bsdf(pugi::xml_node n, const std::string& key, bool two_sided, std::map<std::string, int>& lines);
+    std::string material_for(pugi::xml_node bsdf, const std::string& fallback_name);
+    void read_shape(pugi::xml_node n, size_t index);
+    void read_emitter(pugi::xml_node n, size_t index);
+    pugi::xml_node resolve_ref(pugi::xml_node ref, const std::string& key) {
+        std::string id = required_attr(ref, "id", key);
+        auto it = ids_.find(id);
+        if (it == ids_.end()) fail(ref, key, "reference to an unknown id '" + id + "'");
+        return it->second;
+    }
+
+    std::string text_;
+    std::string file_;
+    std::shared_ptr<const std::string> fname_;
+    MitsubaOptions opt_;
+    std::vector<size_t> newlines_;
+    fs::path dir_;
+    bool legacy_ = false;  // Mitsuba 0.x parameter names
+    std::map<std::string, std::string> vars_;
+    std::map<std::string, pugi::xml_node> ids_;
+    std::map<std::string, std::string> material_of_id_;
+    std::set<std::string> referenced_ids_;
+    SceneDesc desc_;
+    bool have_sensor_ = false;
+};
+
+void Importer::warn_unused(Elem& e, const std::string& what) {
+    for (pugi::xml_node c : e.node.children()) {
+        if (c.type() != pugi::node_element || e.used.count(size_t(c.offset_debug()))) continue;
+        std::string name = c.attribute("name") ? attr(c, "name", e.key) : "";
+        std::string tag = c.name();
+        if (!name.empty())
+            warn(c, e.key, fmt::format("{} '{}' (<{}>) is not supported and was ignored", what, name, tag));
+        else
+            warn(c, e.key, fmt::format("<{}{}> is not supported here and was ignored", tag,
+                                       c.attribute("type") ? fmt::format(" type=\"{}\"", attr(c, "type", e.key)) : ""));
+    }
+}
+
+Rgb Importer::texture_average(pugi::xml_node tex, const std::string& key) {
+    std::string type = attr(tex, "type", key);
+    Elem e{tex, key, {}};
+    if (type != "bitmap") {
+        warn(tex, key, "texture type '" + type + "' is not supported; using its default grey 0.5");
+        for (pugi::xml_node c : tex.children()) e.use(c);
+        return {0.5f, 0.5f, 0.5f};
+    }
+    pugi::xml_node fn = find_param(e, "filename");
+    if (!fn) fail(tex, key, "bitmap texture needs a 'filename' string");
+    std::string file = attr(fn, "value", key + ".filename");
+    fs::path p(file);
+    if (p.is_relative()) p = dir_ / p;
+    bool raw = false;
+    if (auto r = find_param(e, "raw")) raw = attr(r, "value", key) == "true";
+    for (const char* ignored : {"filter_type", "wrap_mode", "to_uv", "format", "accel"})
+        if (auto c = find_param(e, ignored)) (void)c;  // sampling details of a texture Omega averages
+    warn_unused(e);
+
+    OIIO::ImageBuf buf(p.string());
+    if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) fail(fn, key + ".filename", "cannot read '" + file + "': " + buf.geterror());
+    const OIIO::ImageSpec& spec = buf.spec();
+    bool srgb = !raw && (spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::UINT16);
+    int nc = spec.nchannels;
+    std::vector<float> px(size_t(spec.width) * size_t(spec.height) * size_t(nc));
+    buf.get_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, px.data());
+    double sum[3] = {0, 0, 0};
+    size_t n = size_t(spec.width) * size_t(spec.height);
+    for (size_t i = 0; i < n; ++i)
+        for (int ch = 0; ch < 3; ++ch) {
+            float v = px[i * size_t(nc) + size_t(nc >= 3 ? ch : 0)];
+            sum[ch] += srgb ? srgb_to_linear(v) : v;
+        }
+    Rgb avg{float(sum[0] / double(n)), float(sum[1] / double(n)), float(sum[2] / double(n))};
+    for (int ch = 0; ch < 3; ++ch) avg[ch] = std::clamp(avg[ch], 0.f, 1.f);
+    warn(tex, key,
+         fmt::format("bitmap '{}': Omega has no textures yet; using its average colour [{:.4g}, {:.4g}, {:.4g}]{}", file,
+                     avg.x, avg.y, avg.z, srgb ? " (sRGB-decoded)" : ""));
+    return avg;
+}
+
+YAML::Node Importer::colour(pugi::xml_node c, const std::string& key) {
+    std::string tag = c.name();
+    if (tag == "ref") {
+        c = resolve_ref(c, key);
+        tag = c.name();
+    }
+    if (tag == "texture") {
+        Rgb a = texture_average(c, key);
+        return list3(fmt::format("{}", a.x), fmt::format("{}", a.y), fmt::format("{}", a.z));
+    }
+    std::string v = attr(c, "value", key);
+    if (tag == "float") return YAML::Node(v);
+    if (tag == "rgb" || tag == "srgb") {
+        std::vector<std::string> parts;
+        if (!v.empty() && v[0] == '#') {
+            if (v.size() != 7) fail(c, key, "expected #rrggbb, got '" + v + "'");
+            for (int i = 0; i < 3; ++i) {
+                int x = std::stoi(v.substr(size_t(1 + 2 * i), 2), nullptr, 16);
+                parts.push_back(fmt::format("{}", srgb_to_linear(float(x) / 255.f)));
+            }
+            return list3(parts[0], parts[1], parts[2]);
+        }
+        parts = split_numbers(v);
+        if (parts.size() == 1) parts = {parts[0], parts[0], parts[0]};
+        if (parts.size() != 3) fail(c, key, "expected 1 or 3 numbers, got '" + v + "'");
+        if (tag == "srgb")
+            for (auto& p : parts) p = fmt::format("{}", srgb_to_linear(float(to_double(p, c, key))));
+        return list3(parts[0], parts[1], parts[2]);
+    }
+    if (tag == "spectrum") {
+        auto parts = split_numbers(v);
+        if (parts.size() == 1 && parts[0].find(':') == std::string::npos) return YAML::Node(parts[0]);
+        // Wavelength:value pairs: Omega is RGB; the flat average is the best it can do.
+        double sum = 0;
+        int n = 0;
+        for (const auto& p : parts) {
+            size_t colon = p.find(':');
+            if (colon == std::string::npos) fail(c, key, "expected a number or wavelength:value pairs, got '" + v + "'");
+            sum += to_double(p.substr(colon + 1), c, key);
+            ++n;
+        }
+        if (n == 0) fail(c, key, "empty spectrum");
+        warn(c, key, "a sampled spectrum is approximated by its average value (Omega renders RGB)");
+        return YAML::Node(fmt::format("{}", sum / n));
+    }
+    fail(c, key, "expected a colour (<rgb>, <spectrum>, <float> or a bitmap <texture>), got <" + tag + ">");
+}
+
+YAML::Node Importer::transform_ops(pugi::xml_node t, const std::string& key) {
+    YAML::Node ops(YAML::NodeType::Sequence);
+    for (pugi::xml_node op : t.children()) {
+        if (op.type() != pugi::node_element) continue;
+        std::string tag = op.name();
+        YAML::Node m(YAML::NodeType::Map);
+        if (tag == "matrix") {
+            auto parts = split_numbers(required_attr(op, "value", key));
+            if (parts.size() == 9) {  // 3x3: linear part only
+                parts = {parts[0], parts[1], parts[2], "0", parts[3], parts[4], parts[5], "0",
+                         parts[6], parts[7], parts[8], "0", "0",      "0",      "0",      "1"};
+            }
+            if (parts.size() != 16) fail(op, key, fmt::format("<matrix> needs 16 numbers, got {}", parts.size()));
+            YAML::Node l(YAML::NodeType::Sequence);
+            for (auto& p : parts) l.push_back(p);
+            m["matrix"] = l;
+        } else if (tag == "lookat" || tag == "look_at") {
+            auto vec = [&](const char* a) {
+                auto parts = split_numbers(required_attr(op, a, key));
+                if (parts.size() != 3) fail(op, key, fmt::format("lookat {} needs 3 numbers", a));
+                return list3(parts[0], parts[1], parts[2]);
+            };
+            YAML::Node la(YAML::NodeType::Map);
+            la["origin"] = vec("origin");
+            la["target"] = vec("target");
+            la["up"] = op.attribute("up") ? vec("up") : list3("0", "1", "0");
+            m["look_at"] = la;
+        } else if (tag == "translate") {
+            m["translate"] = vec_node(vec3(op, key));
+        } else if (tag == "scale") {
+            if (op.attribute("value") && split_numbers(attr(op, "value", key)).size() == 1)
+                m["scale"] = attr(op, "value", key);
+            else if (op.attribute("value"))
+                m["scale"] = vec_node(vec3(op, key));
+            else
+                m["scale"] = vec_node({op.attribute("x") ? to_double(attr(op, "x", key), op, key) : 1.0,
+                                       op.attribute("y") ? to_double(attr(op, "y", key), op, key) : 1.0,
+                                       op.attribute("z") ? to_double(attr(op, "z", key), op, key) : 1.0});
+        } else if (tag == "rotate") {
+            YAML::Node r(YAML::NodeType::Map);
+            r["axis"] = vec_node(vec3(op, key));  // x, y, z attributes or value="x y z"
+            r["angle"] = required_attr(op, "angle", key);
+            m["rotate"] = r;
+        } else {
+            warn(op, key, "transform operation <" + tag + "> is not supported and was ignored");
+            continue;
+        }
+        ops.push_back(m);
+    }
+    return ops;
+}
+
+void Importer::read_defaults(pugi::xml_node scene) {
+    vars_ = opt_.defines;
+    for (pugi::xml_node d : scene.children("default")) {
+        std::string name = d.attribute("name").as_string();
+        if (name.empty()) fail(d, "default", "<default> needs a 'name' attribute");
+        if (!d.attribute("value")) fail(d, "default", "<default> needs a 'value' attribute");
+        if (!vars_.count(name)) vars_[name] = d.attribute("value").as_string();
+    }
+    for (const auto& [name, value] : opt_.defines) {
+        bool declared = false;
+        for (pugi::xml_node d : scene.children("default")) declared |= name == d.attribute("name").as_string();
+        bool used = text_.find("$" + name) != std::string::npos;
+        if (!declared && !used)
+            desc_.warnings.push_back(fmt::format("{}:1: define {}={} is not used by the scene", file_, name, value));
+    }
+}
+
+void Importer::read_integrator(pugi::xml_node n) {
+    std::string key = "integrator";
+    Elem e{n, key, {}};
+    std::string type = attr(n, "type", key);
+    YAML::Node y(YAML::NodeType::Map);
+    std::map<std::string, int> lines;
+    if (type == "path" || type == "bdpt" || type == "ptracer") {
+        y["type"] = type == "ptracer" ? "light" : type;
+    } else {
+        y["type"] = "path";
+        warn(n, key, "integrator '" + type + "' is not supported; using Omega's path tracer (pass --integrator to choose)");
+    }
+    for (const char* p : {"max_depth", "rr_depth"})
+        if (auto c = find_param(e, p)) {
+            y[p] = scalar(c, key);
+            lines[p] = line_of(c);
+        }
+    if (auto c = find_param(e, "hide_emitters"))
+        if (attr(c, "value", key) == "true") warn(c, key, "hide_emitters is not supported; emitters stay visible");
+    warn_unused(e);
+    desc_.integrator = checked(key, n, lines, [&](ParamValue v) {
+        return parse_integrator_value(ParamValue(y, v.path(), fname_, v.line()));
+    });
+}
+
+void Importer::read_sensor(pugi::xml_node n) {
+    std::string key = "sensor";
+    Elem e{n, key, {}};
+    std::string type = attr(n, "type", key);
+    YAML::Node y(YAML::NodeType::Map);
+    std::map<std::string, int> lines;
+    if (type == "perspective") y["type"] = "perspective";
+    else if (type == "thinlens") y["type"] = "thin_lens";
+    else if (type == "orthographic") y["type"] = "orthographic";
+    else {
+        y["type"] = "perspective";
+        warn(n, key, "sensor '" + type + "' is not supported; using a perspective camera");
+    }
+    bool ortho = type == "orthographic";
+
+    // Film first: fov_axis conversions need the aspect ratio.
+    int width = 768, height = 576;  // Mitsuba's hdrfilm defaults
+    YAML::Node film(YAML::NodeType::Map);
+    YAML::Node filter_node = YAML::Node("gaussian");  // Mitsuba's default reconstruction filter
+    pugi::xml_node film_el = n.child("film");
+    if (film_el) {
+        e.use(film_el);
+        std::string fkey = key + ".film";
+        Elem f{film_el, fkey, {}};
+        std::string ftype = attr(film_el, "type", fkey);
+        if (ftype != "hdrfilm") warn(film_el, fkey, "film '" + ftype + "' is not supported; using an RGB EXR film");
+        lines["film"] = line_of(film_el);
+        if (auto c = find_param(f, "width")) width = int(number(c, fkey));
+        if (auto c = find_param(f, "height")) height = int(number(c, fkey));
+        for (const char* fmt_key : {"file_format", "pixel_format", "component_format"}) {
+            if (auto c = find_param(f, fmt_key)) {
+                std::string v = attr(c, "value", fkey);
+                static const std::set<std::string> ok = {"openexr", "exr", "rgb", "rgba", "float16", "float32"};
+                if (!ok.count(v))
+                    warn(c, fkey, fmt::format("{} '{}' is not supported; Omega writes RGB float EXR", fmt_key, v));
+            }
+        }
+        int cx = 0, cy = 0, cw = width, ch = height;
+        bool crop = false;
+        if (auto c = find_param(f, "crop_offset_x")) cx = int(number(c, fkey)), crop = true;
+        if (auto c = find_param(f, "crop_offset_y")) cy = int(number(c, fkey)), crop = true;
+        if (auto c = find_param(f, "crop_width")) cw = int(number(c, fkey)), crop = true;
+        if (auto c = find_param(f, "crop_height")) ch = int(number(c, fkey)), crop = true;
+        if (crop) {
+            YAML::Node cr(YAML::NodeType::Sequence);
+            for (int v : {cx, cy, cx + cw, cy + ch}) cr.push_back(v);
+            film["crop"] = cr;
+        }
+        if (pugi::xml_node rf = film_el.child("rfilter")) {
+            f.use(rf);
+            std::string rkey = fkey + ".rfilter";
+            Elem r{rf, rkey, {}};
+            std::string rtype = attr(rf, "type", rkey);
+            if (rtype == "box" || rtype == "tent" || rtype == "gaussian") {
+                filter_node = YAML::Node(rtype);
+                if (rtype == "gaussian")
+                    if (auto c = find_param(r, "stddev")) film["stddev"] = scalar(c, rkey);
+                if (rtype == "tent")
+                    if (auto c = find_param(r, "radius"))
+                        if (number(c, rkey) != 1.0) warn(c, rkey, "tent radius other than 1 is not supported; using 1");
+            } else {
+                filter_node = YAML::Node("gaussian");
+                warn(rf, rkey, "reconstruction filter '" + rtype + "' is not supported; using a gaussian (stddev 0.5)");
+            }
+            warn_unused(r);
+        }
+        warn_unused(f);
+    }
+    film["width"] = width;
+    film["height"] = height;
+    film["filter"] = filter_node;
+    y["film"] = film;
+
+    if (!ortho) {
+        pugi::xml_node fovn = find_param(e, "fov");
+        double fov = 0;
+        if (fovn) {
+            fov = number(fovn, key);
+            lines["fov"] = line_of(fovn);
+        } else {
+            // Mitsuba's default: a 50 mm lens on 36 x 24 mm film, i.e. the diagonal field of view.
+            if (auto fl = find_param(e, "focal_length"))
+                warn(fl, key, "focal_length is not supported; using fov with Mitsuba's 50mm default instead");
+            fov = 2 * std::atan(std::sqrt(36.0 * 36.0 + 24.0 * 24.0) / (2 * 50.0)) * 180 / kPi;
+            warn(n, key, fmt::format("no fov given: using Mitsuba's default (50 mm lens, {:.4g} degrees diagonal)", fov));
+        }
+        std::string axis = "x";
+        if (auto c = find_param(e, "fov_axis")) axis = attr(c, "value", key), lines["fov_axis"] = line_of(c);
+        else if (!fovn) axis = "diagonal";
+        double t = std::tan(fov * kPi / 360);
+        if (axis == "smaller") axis = width <= height ? "x" : "y";
+        if (axis == "larger") axis = width >= height ? "x" : "y";
+        if (axis == "diagonal") {
+            if (!(fov > 0 && fov < 180)) fail(fovn ? fovn : n, key + ".fov", fmt::format("must be in (0, 180), got {}", fov));
+            double fx = 2 * std::atan(t * width / std::hypot(double(width), double(height))) * 180 / kPi;
+            y["fov"] = fmt::format("{}", fx);
+            y["fov_axis"] = "x";
+        } else {
+            y["fov"] = fovn ? attr(fovn, "value", key) : fmt::format("{}", fov);
+            y["fov_axis"] = axis;  // x or y; anything else fails in the sensor parser
+        }
+    }
+    if (type == "thinlens") {
+        for (const char* p : {"aperture_radius", "focus_distance"})
+            if (auto c = find_param(e, p)) y[p] = scalar(c, key), lines[p] = line_of(c);
+    }
+    if (auto c = find_param(e, "near_clip")) y["near_clip"] = scalar(c, key), lines["near_clip"] = line_of(c);
+    if (auto c = find_param(e, "far_clip")) warn(c, key, "far_clip is not supported; nothing is clipped far away");
+    if (auto c = find_param(e, "to_world")) {
+        Mat4 m = to_world(c, key + ".to_world");
+        YAML::Node l(YAML::NodeType::Sequence);
+        for (double x : m.m) l.push_back(fmt::format("{}", x));
+        YAML::Node mm(YAML::NodeType::Map);
+        mm["matrix"] = l;
+        y["to_world"] = mm;
+    }
+    if (pugi::xml_node s = n.child("sampler")) {
+        e.use(s);
+        std::string skey = key + ".sampler";
+        Elem se{s, skey, {}};
+        std::string stype = attr(s, "type", skey);
+        if (stype != "independent")
+            warn(s, skey, "sampler '" + stype + "' is replaced by Omega's independent sampler (same expectation)");
+        if (auto c = find_param(se, "sample_count")) y["spp"] = scalar(c, skey), lines["spp"] = line_of(c);
+        if (auto c = find_param(se, "seed")) warn(c, skey, "the sampler seed is ignored; use --seed");
+        warn_unused(se);
+    }
+    warn_unused(e);
+    desc_.sensor = checked(key, n, lines, [&](ParamValue v) {
+        return parse_sensor_value(ParamValue(y, v.path(), fname_, v.line()));
+    });
+    desc_.sensor.loc = {file_, line_of(n), key};
+}
+
+// A bsdf element as a YAML material mapping (for parse_material_value).
+YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool two_sided,
+                               std::map<std::string, int>& lines) {
+    std::string type = attr(n, "type", key);
+    Elem e{n, key, {}};
+    YAML::Node y(YAML::NodeType::Map);
+    auto put = [&](const char* yaml_key, const char* xml_name) {
+        if (auto c = find_param(e, xml_name)) {
+            y[yaml_key] = c.name() == std::string("string") ? YAML::Node(attr(c, "value", key)) : scalar(c, key);
+            lines[yaml_key] = line_of(c);
+        }
+    };
+    auto put_colour = [&](const char* yaml_key, const char* xml_name) {
+        if (auto c = find_param(e, xml_name)) {
+            y[yaml_key] = colour(c, key + "." + xml_name);
+            lines[yaml_key] = line_of(c);
+        }
+    };
+    auto nested = [&]() -> pugi::xml_node {
+        for (pugi::xml_node c : n.children()) {
+            std::string t = c.name();
+            if (t == "bsdf") {
+                e.use(c);
+                return c;
+            }
+            if (t == "ref") {
+                pugi::xml_node r = resolve_ref(c, key);
+                if (std::string(r.name()) == "bsdf") {
+                    e.use(c);
+                    return r;
+                }
+            }
+        }
+        return {};
+    };
+    auto put_alpha = [&](const char* def) {
+        bool any = false;
+        for (const char* p : {"alpha", "alpha_u", "alpha_v"})
+            if (auto c = find_param(e, p)) {
+                if (std::string(c.name()) == "texture" || std::string(c.name()) == "ref") {
+                    warn(c, key, std::string(p) + " textures are not supported; using alpha " + def);
+                    y["alpha"] = def;
+                } else {
+                    y[p] = scalar(c, key);
+                }
+                lines[p] = line_of(c);
+                any = true;
+            }
+        if (!any) y["alpha"] = def;  // Mitsuba's default roughness
+        if (auto c = find_param(e, "distribution")) {
+            y["distribution"] = attr(c, "value", key);
+            lines["distribution"] = line_of(c);
+        } else {
+            y["distribution"] = "beckmann";  // Mitsuba's default
+        }
+        if (auto c = find_param(e, "sample_visible")) (void)c;  // sampling only: same expectation
+    };
+    auto put_conductor = [&] {
+        y["type"] = "conductor";
+        if (auto c = find_param(e, "material")) {
+            std::string m = attr(c, "value", key);
+            lines["material"] = line_of(c);
+            if (m == "Au" || m == "Ag" || m == "Cu" || m == "Al") y["material"] = m;
+            else if (m != "none")
+                warn(c, key, "conductor material '" + m + "' is not tabulated in Omega (Au, Ag, Cu, Al); using a perfect mirror");
+        }
+        put_colour("eta", "eta");
+        put_colour("k", "k");
+        put_colour("specular_reflectance", "specular_reflectance");
+        y["two_sided"] = two_sided;
+    };
+
+    if (type == "twosided") {
+        pugi::xml_node inner = nested();
+        if (!inner) fail(n, key, "twosided needs a nested <bsdf>");
+        int count = 0;
+        for (pugi::xml_node c : n.children())
+            if (std::string(c.name()) == "bsdf" || std::string(c.name()) == "ref") ++count;
+        if (count > 1) warn(n, key, "twosided with two different BSDFs is not supported; the front one is used on both sides");
+        for (pugi::xml_node c : n.children()) e.use(c);
+        return read_bsdf(inner, key, true, lines);
+    }
+    if (type == "diffuse") {
+        y["type"] = "diffuse";
+        put_colour("reflectance", "reflectance");
+        y["two_sided"] = two_sided;
+    } else if (type == "conductor") {
+        put_conductor();
+    } else if (type == "roughconductor") {
+        put_conductor();
+        put_alpha("0.1");
+    } else if (type == "dielectric" || type == "roughdielectric" || type == "thindielectric") {
+        y["type"] = "dielectric";
+        if (type == "thindielectric")
+            warn(n, key, "thindielectric is approximated by a dielectric interface (the shape is treated as solid glass)");
+        for (const char* p : {"int_ior", "ext_ior"}) put(p, p);
+        put_colour("specular_reflectance", "specular_reflectance");
+        put_colour("specular_transmittance", "specular_transmittance");
+        if (type == "roughdielectric") put_alpha("0.1");
+    } else if (type == "plastic" || type == "roughplastic") {
+        y["type"] = "diffuse";
+        put_colour("reflectance", "diffuse_reflectance");
+        y["two_sided"] = two_sided;
+        for (const char* p : {"specular_reflectance", "int_ior", "ext_ior", "nonlinear", "alpha", "distribution", "sample_visible"})
+            (void)find_param(e, p);
+        warn(n, key,
+             type + " is approximated by a diffuse BSDF with its diffuse_reflectance: the specular coating "
+                    "(highlights and Fresnel darkening) is dropped");
+    } else if (type == "null") {
+        y["type"] = "black";
+        warn(n, key, "the null BSDF (an invisible surface) is not supported; the surface is black instead");
+    } else {
+        pugi::xml_node inner = nested();
+        if (inner) {
+            warn(n, key, "BSDF '" + type + "' is not supported; using its nested BSDF");
+            for (pugi::xml_node c : n.children()) e.use(c);
+            return read_bsdf(inner, key, two_sided, lines);
+        }
+        warn(n, key, "BSDF '" + type + "' is not supported; using a grey diffuse BSDF (reflectance 0.5)");
+        for (pugi::xml_node c : n.children()) e.use(c);
+        y["type"] = "diffuse";
+        y["two_sided"] = two_sided;
+    }
+    warn_unused(e);
+    return y;
+}
+
+std::string Importer::material_for(pugi::xml_node bsdf, const std::string& fallback_name) {
+    std::string id = bsdf.attribute("id") ? attr(bsdf, "id", fallback_name) : "";
+    if (!id.empty()) {
+        referenced_ids_.insert(id);
+        if (auto it = material_of_id_.find(id); it != material_of_id_.end()) return it->second;
+    }
+    std::string name = id.empty() ? fallback_name : id;
+    while (desc_.materials.count(name)) name += "'";
+    std::string key = id.empty() ? fallback_name : "bsdf(" + id + ")";
+    std::map<std::string, int> lines;
+    YAML::Node y = read_bsdf(bsdf, key, false, lines);
+    MaterialDesc m = checked(key, bsdf, lines, [&](ParamValue v) {
+        return parse_material_value(ParamValue(y, v.path(), fname_, v.line()), name, desc_.warnings);
+    });
+    m.loc = {file_, line_of(bsdf), key};
+    desc_.materials[name] = m;
+    if (!id.empty()) material_of_id_[id] = name;
+    return name;
+}
+
+void Importer::read_shape(pugi::xml_node n, size_t index) {
+    std::string key = elem_key(n, "shape", index);
+    Elem e{n, key, {}};
+    std::string type = attr(n, "type", key);
+    ShapeDesc s;
+    s.loc = {file_, line_of(n), key};
+    s.name = n.attribute("id") ? attr(n, "id", key) : "";
+    if (type == "rectangle") s.type = ShapeType::Rectangle;
+    else if (type == "cube") s.type = ShapeType::Cube;
+    else if (type == "sphere") s.type = ShapeType::Sphere;
+    else if (type == "disk") s.type = ShapeType::Disk;
+    else if (type == "obj" || type == "ply") s.type = ShapeType::Mesh;
+    else {
+        warn(n, key, "shape '" + type + "' is not supported; it was skipped");
+        return;
+    }
+    if (auto c = find_param(e, "to_world")) s.to_world = to_world(c, key + ".to_world");
+    if (s.type == ShapeType::Sphere) {
+        if (auto c = find_param(e, "center")) s.center = vec3(c, key + ".center");
+        if (auto c = find_param(e, "radius")) {
+            s.radius = number(c, key + ".radius");
+            if (!(s.radius > 0)) fail(c, key + ".radius", fmt::format("must be > 0, got {}", s.radius));
+        }
+    }
+    if (s.type == ShapeType::Mesh) {
+        pugi::xml_node fnode = find_param(e, "filename");
+        if (!fnode) fail(n, key, "a " + type + " shape needs a 'filename' string");
+        std::string file = attr(fnode, "value", key + ".filename");
+        fs::path p(file);
+        if (p.is_relative()) p = dir_ / p;
+        std::error_code ec;
+        if (!fs::is_regular_file(p, ec) || !std::ifstream(p).good()) fail(fnode, key + ".filename", "cannot open '" + file + "'");
+        fs::path abs = fs::absolute(p, ec);
+        s.file = (ec ? p : abs).lexically_normal().string();
+        if (auto c = find_param(e, "face_normals")) s.face_normals = attr(c, "value", key) == "true";
+        if (auto c = find_param(e, "flip_tex_coords")) (void)c;  // no textures: no effect
+    }
+    if (auto c = find_param(e, "flip_normals")) s.flip_normals = attr(c, "value", key) == "true";
+
+    std::string material;
+    for (pugi::xml_node c : n.children()) {
+        std::string tag = c.name();
+        pugi::xml_node target = c;
+        if (tag == "ref") {
+            target = resolve_ref(c, key);
+            tag = target.name();
+            if (tag != "bsdf" && tag != "emitter") continue;  // left for warn_unused
+        }
+        if (tag == "bsdf") {
+            e.use(c);
+            if (!material.empty()) {
+                warn(c, key, "a second BSDF on one shape was ignored");
+                continue;
+            }
+            material = material_for(target, (s.name.empty() ? key : s.name) + ".bsdf");
+        } else if (tag == "emitter") {
+            e.use(c);
+            std::string ekey = key + ".emitter";
+            std::string etype = attr(target, "type", ekey);
+            if (etype != "area") {
+                warn(target, ekey, "emitter '" + etype + "' cannot be attached to a shape; it was skipped");
+                continue;
+            }
+            Elem ee{target, ekey, {}};
+            YAML::Node y(YAML::NodeType::Map);
+            std::map<std::string, int> lines;
+            y["type"] = "area";
+            if (auto r = find_param(ee, "radiance")) y["radiance"] = colour(r, ekey + ".radiance"), lines["radiance"] = line_of(r);
+            if (auto r = find_param(ee, "sampling_weight")) warn(r, ekey, "sampling_weight is ignored (lights are chosen by power)");
+            warn_unused(ee);
+            s.emitter = checked(ekey, target, lines, [&](ParamValue v) {
+                return parse_emitter_value(ParamValue(y, v.path(), fname_, v.line()));
+            });
+        }
+    }
+    if (material.empty()) {
+        // Mitsuba's default BSDF: a one-sided grey diffuse.
+        const std::string name = "default_diffuse";
+        if (!desc_.materials.count(name)) desc_.materials[name] = MaterialDesc{name, DiffuseBsdf{{0.5f, 0.5f, 0.5f}, false}, s.loc};
+        material = name;
+    }
+    s.material = material;
+    warn_unused(e);
+    desc_.shapes.push_back(std::move(s));
+}
+
+void Importer::read_emitter(pugi::xml_node n, size_t index) {
+    std::string key = elem_key(n, "emitter", index);
+    Elem e{n, key, {}};
+    std::string type = attr(n, "type", key);
+    YAML::Node y(YAML::NodeType::Map);
+    std::map<std::string, int> lines;
+    auto put_colour = [&](const char* yaml_key, const char* xml_name) {
+        if (auto c = find_param(e, xml_name)) y[yaml_key] = colour(c, key + "." + xml_name), lines[yaml_key] = line_of(c);
+    };
+    if (type == "point") {
+        y["type"] = "point";
+        Vec3d pos{0, 0, 0};
+        if (auto c = find_param(e, "position")) pos = vec3(c, key + ".position");
+        if (auto c = find_param(e, "to_world")) pos = to_world(c, key + ".to_world").point(pos);
+        y["position"] = vec_node(pos);
+        put_colour("intensity", "intensity");
+    } else if (type == "spot") {
+        y["type"] = "spot";
+        if (auto c = find_param(e, "to_world")) {
+            Mat4 m = to_world(c, key + ".to_world");
+            YAML::Node l(YAML::NodeType::Sequence);
+            for (double x : m.m) l.push_back(fmt::format("{}", x));
+            y["to_world"]["matrix"] = l;
+        }
+        put_colour("intensity", "intensity");
+        for (const char* p : {"cutoff_angle", "beam_width"})
+            if (auto c = find_param(e, p)) y[p] = scalar(c, key), lines[p] = line_of(c);
+    } else if (type == "directional") {
+        y["type"] = "directional";
+        Vec3d d{0, 0, 1};
+        if (auto c = find_param(e, "direction")) d = vec3(c, key + ".direction");
+        if (auto c = find_param(e, "to_world")) d = to_world(c, key + ".to_world").vector(d);
+        y["direction"] = vec_node(d);
+        put_colour("irradiance", "irradiance");
+    } else if (type == "constant") {
+        y["type"] = "constant";
+        put_colour("radiance", "radiance");
+    } else if (type == "envmap") {
+        pugi::xml_node fn = find_param(e, "filename");
+        if (!fn) fail(n, key, "envmap needs a 'filename' string");
+        std::string file = attr(fn, "value", key);
+        fs::path p(file);
+        if (p.is_relative()) p = dir_ / p;
+        OIIO::ImageBuf buf(p.string());
+        if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) fail(fn, key + ".filename", "cannot read '" + file + "': " + buf.geterror());
+        const OIIO::ImageSpec& spec = buf.spec();
+        std::vector<float> px(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
+        buf.get_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, px.data());
+        // Latitude-longitude map: weight each row by sin(theta), its share of the sphere.
+        double sum[3] = {0, 0, 0}, wsum = 0;
+        for (int yy = 0; yy < spec.height; ++yy) {
+            double w = std::sin((yy + 0.5) * kPi / spec.height);
+            for (int xx = 0; xx < spec.width; ++xx)
+                for (int ch = 0; ch < 3; ++ch)
+                    sum[ch] += w * px[(size_t(yy) * size_t(spec.width) + size_t(xx)) * size_t(spec.nchannels) +
+                                      size_t(spec.nchannels >= 3 ? ch : 0)];
+            wsum += w * spec.width;
+        }
+        double scale = 1;
+        if (auto c = find_param(e, "scale")) scale = number(c, key + ".scale");
+        Vec3d avg{scale * sum[0] / wsum, scale * sum[1] / wsum, scale * sum[2] / wsum};
+        y["type"] = "constant";
+        y["radiance"] = vec_node(avg);
+        if (auto c = find_param(e, "to_world")) (void)c;  // a constant has no orientation
+        warn(n, key, fmt::format("envmap '{}' is approximated by a constant environment of its average radiance "
+                                 "[{:.4g}, {:.4g}, {:.4g}]",
+                                 file, avg.x, avg.y, avg.z));
+    } else {
+        warn(n, key, "emitter '" + type + "' is not supported; it was skipped");
+        return;
+    }
+    if (auto c = find_param(e, "sampling_weight")) warn(c, key, "sampling_weight is ignored (lights are chosen by power)");
+    warn_unused(e);
+    LightDesc l = checked(key, n, lines, [&](ParamValue v) {
+        return parse_light_value(ParamValue(y, v.path(), fname_, v.line()));
+    });
+    l.loc = {file_, line_of(n), key};
+    desc_.lights.push_back(l);
+}
+
+SceneDesc Importer::run() {
+    pugi::xml_document doc;
+    pugi::xml_parse_result res = doc.load_buffer(text_.data(), text_.size(), pugi::parse_default, pugi::encoding_utf8);
+    if (!res)
+        throw SceneError(fmt::format("{}:{}: invalid XML: {}", file_, line_at(size_t(std::max<ptrdiff_t>(0, res.offset))),
+                                     res.description()));
+    pugi::xml_node scene = doc.child("scene");
+    if (!scene) throw SceneError(fmt::format("{}:1: scene: the root element must be <scene>", file_));
+    desc_.path = file_;
+    std::string version = scene.attribute("version").as_string();
+    if (version.empty()) warn(scene, "scene", "no version attribute; reading it as Mitsuba 3");
+    else if (version[0] == '0' || version[0] == '1') {
+        legacy_ = true;
+        warn(scene, "scene", "a Mitsuba " + version + " scene: camelCase parameter names are read as Mitsuba 3's snake_case");
+    }
+    read_defaults(scene);
+    // Ids anywhere in the file (Mitsuba allows references to any named object).
+    for (pugi::xpath_node xn : doc.select_nodes("//*[@id and name() != 'ref']")) {
+        pugi::xml_node el = xn.node();
+        std::string id = attr(el, "id", el.name());
+        if (ids_.count(id)) fail(el, el.name(), "duplicate id '" + id + "'");
+        ids_[id] = el;
+    }
+
+    size_t shape_index = 0, emitter_index = 0;
+    bool have_integrator = false;
+    for (pugi::xml_node c : scene.children()) {
+        if (c.type() != pugi::node_element) continue;
+        std::string tag = c.name();
+        if (tag == "default") continue;
+        if (tag == "integrator") {
+            if (have_integrator) warn(c, "integrator", "a second integrator was ignored");
+            else read_integrator(c);
+            have_integrator = true;
+        } else if (tag == "sensor") {
+            if (have_sensor_) warn(c, "sensor", "a second sensor was ignored (Omega renders one camera)");
+            else read_sensor(c);
+            have_sensor_ = true;
+        } else if (tag == "shape") {
+            read_shape(c, shape_index++);
+        } else if (tag == "emitter") {
+            read_emitter(c, emitter_index++);
+        } else if (tag == "bsdf" || tag == "texture") {
+            // Built when a shape refers to them.
+        } else {
+            std::string type = c.attribute("type") ? " type=\"" + attr(c, "type", tag) + "\"" : "";
+            warn(c, tag, "<" + tag + type + "> is not supported and was ignored");
+        }
+    }
+    if (!have_sensor_) {
+        desc_.sensor.film.crop = {0, 0, desc_.sensor.film.width, desc_.sensor.film.height};
+        warn(scene, "scene", "no <sensor>: using Omega's default camera");
+    }
+    for (pugi::xml_node b : scene.children("bsdf")) {
+        std::string id = b.attribute("id") ? attr(b, "id", "bsdf") : "";
+        if (!referenced_ids_.count(id)) warn(b, id.empty() ? "bsdf" : "bsdf(" + id + ")", "never used by any shape");
+    }
+    bool any_light = !desc_.lights.empty();
+    for (const ShapeDesc& s : desc_.shapes) any_light |= s.emitter.has_value() && !is_black(s.emitter->radiance);
+    if (!any_light) desc_.warnings.push_back(fmt::format("{}:1: the scene has no light source; the image will be black", file_));
+    return std::move(desc_);
+}
+
+}  // namespace
+
+SceneDesc import_mitsuba_string(const std::string& xml, const std::string& virtual_path, const MitsubaOptions& options) {
+    Importer imp(xml, virtual_path, options);
+    try {
+        return imp.run();
+    } catch (const YAML::Exception& e) {
+        throw SceneError(fmt::format("{}:1: internal error converting a value: {}", virtual_path, e.msg));
+    }
+}
+
+SceneDesc import_mitsuba_file(const std::string& path, const MitsubaOptions& options) {
+    std::ifstream in(path, std::ios::binary);
+    std::error_code ec;
+    if (!in || fs::is_directory(path, ec)) throw SceneError(fmt::format("{}: cannot open the scene file", path));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return import_mitsuba_string(ss.str(), path, options);
+}
+
+bool is_mitsuba_path(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext == ".xml";
+}
+
+SceneDesc load_scene_file(const std::string& path, const MitsubaOptions& options) {
+    if (is_mitsuba_path(path)) return import_mitsuba_file(path, options);
+    if (!options.defines.empty())
+        throw SceneError(fmt::format("{}: -D {}=...: defines only apply to Mitsuba XML scenes", path,
+                                     options.defines.begin()->first));
+    return parse_scene_file(path);
+}
+
+}  // namespace omega

@@ -1,0 +1,36 @@
+#pragma once
+// Mitsuba 3 XML -> SceneDesc: the subset that Bitterli's "Rendering resources" scenes use.
+// See docs/scene-format.md ("Importing Mitsuba XML") for what is supported and what warns.
+//
+// - Every value goes through the same section parsers as a YAML v1 file (scene_parser.h), so the
+//   checks, defaults and messages are the same, and the result written back as YAML
+//   (scene_writer.h) parses to an equal SceneDesc.
+// - Anything the importer does not support (a plugin, a parameter, an approximation it had to
+//   make) is named in SceneDesc::warnings as "file:line: element: what"; nothing is dropped
+//   silently.
+// - Bad input (malformed XML, an undefined $variable, a missing mesh file, a value out of range)
+//   throws SceneError "file:line: key: what is wrong", the line taken from the XML.
+#include <map>
+#include <string>
+
+#include "scene/scene_desc.h"
+
+namespace omega {
+
+struct MitsubaOptions {
+    // Like `mitsuba -D name=value`: overrides the scene's <default name=... value=...>.
+    std::map<std::string, std::string> defines;
+};
+
+SceneDesc import_mitsuba_file(const std::string& path, const MitsubaOptions& options = {});
+// `virtual_path` names the text in messages; relative file names resolve against its folder.
+SceneDesc import_mitsuba_string(const std::string& xml, const std::string& virtual_path,
+                                const MitsubaOptions& options = {});
+
+// True for a path ending in .xml (case-insensitive).
+bool is_mitsuba_path(const std::string& path);
+// A scene in either format: Mitsuba XML for .xml (with `options`), YAML v1 otherwise (a define
+// given for a YAML scene is an error, since it would be silently ignored).
+SceneDesc load_scene_file(const std::string& path, const MitsubaOptions& options = {});
+
+}  // namespace omega

@@ -1,0 +1,533 @@
+#include "scene/mitsuba_importer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "scene/scene_parser.h"
+#include "scene/scene_writer.h"
+#include "scene/test_helpers.h"
+
+using namespace omega;
+using omega::test::scene_error_of;
+using omega::test::TempDir;
+
+namespace {
+
+const std::string kShared = "/work/shared/scenes";
+
+std::string shared_scene(const std::string& name) {
+    // The shared scenes live beside the repository checkouts; skip where they are absent.
+    return kShared + "/" + name + "/scene.xml";
+}
+bool have_shared() { return std::ifstream(shared_scene("cornell-box")).good(); }
+
+SceneDesc import(const std::string& body, const MitsubaOptions& opt = {}) {
+    return import_mitsuba_string("<scene version=\"3.0.0\">\n" + body + "\n</scene>\n", "scene.xml", opt);
+}
+std::string import_error(const std::string& body) {
+    return scene_error_of([&] { import(body); });
+}
+bool has_warning(const SceneDesc& d, const std::string& part) {
+    for (const auto& w : d.warnings)
+        if (w.find(part) != std::string::npos) return true;
+    return false;
+}
+std::string all_warnings(const SceneDesc& d) {
+    std::string s;
+    for (const auto& w : d.warnings) s += w + "\n";
+    return s;
+}
+
+void expect_mat(const Mat4& a, const std::array<double, 16>& b, double eps = 0) {
+    for (size_t i = 0; i < 16; ++i) EXPECT_NEAR(a.m[i], b[i], eps) << "element " << i;
+}
+void expect_rgb(const Rgb& a, float r, float g, float b) {
+    EXPECT_FLOAT_EQ(a.x, r);
+    EXPECT_FLOAT_EQ(a.y, g);
+    EXPECT_FLOAT_EQ(a.z, b);
+}
+
+// Every field the YAML parser reads, bit for bit (locations and warnings aside).
+void expect_same(const SceneDesc& a, const SceneDesc& b) {
+    EXPECT_EQ(a.integrator.type, b.integrator.type);
+    EXPECT_EQ(a.integrator.max_depth, b.integrator.max_depth);
+    EXPECT_EQ(a.integrator.rr_depth, b.integrator.rr_depth);
+    const SensorDesc &s = a.sensor, &t = b.sensor;
+    EXPECT_EQ(s.type, t.type);
+    EXPECT_EQ(s.fov, t.fov);
+    EXPECT_EQ(s.fov_axis, t.fov_axis);
+    EXPECT_EQ(s.to_world.m, t.to_world.m);
+    EXPECT_EQ(s.aperture_radius, t.aperture_radius);
+    EXPECT_EQ(s.focus_distance, t.focus_distance);
+    EXPECT_EQ(s.near_clip, t.near_clip);
+    EXPECT_EQ(s.film.width, t.film.width);
+    EXPECT_EQ(s.film.height, t.film.height);
+    EXPECT_EQ(s.film.filter, t.film.filter);
+    EXPECT_EQ(s.film.filter_radius, t.film.filter_radius);
+    EXPECT_EQ(s.film.gaussian_stddev, t.film.gaussian_stddev);
+    EXPECT_EQ(s.film.crop, t.film.crop);
+    EXPECT_EQ(s.film.has_crop, t.film.has_crop);
+    EXPECT_EQ(s.halt.spp, t.halt.spp);
+    EXPECT_EQ(s.halt.time_s, t.halt.time_s);
+    EXPECT_EQ(s.halt.target_error, t.halt.target_error);
+    ASSERT_EQ(a.materials.size(), b.materials.size());
+    for (const auto& [name, m] : a.materials) {
+        ASSERT_TRUE(b.materials.count(name)) << name;
+        const Bsdf &x = m.bsdf, &y = b.materials.at(name).bsdf;
+        ASSERT_EQ(x.index(), y.index()) << name;
+        if (auto* d = std::get_if<DiffuseBsdf>(&x)) {
+            auto* e = std::get_if<DiffuseBsdf>(&y);
+            EXPECT_EQ(d->reflectance, e->reflectance) << name;
+            EXPECT_EQ(d->two_sided, e->two_sided) << name;
+        } else if (auto* c = std::get_if<ConductorBsdf>(&x)) {
+            auto* e = std::get_if<ConductorBsdf>(&y);
+            EXPECT_EQ(c->eta, e->eta) << name;
+            EXPECT_EQ(c->k, e->k) << name;
+            EXPECT_EQ(c->has_ior, e->has_ior) << name;
+            EXPECT_EQ(c->specular_reflectance, e->specular_reflectance) << name;
+            EXPECT_EQ(c->alpha_u, e->alpha_u) << name;
+            EXPECT_EQ(c->alpha_v, e->alpha_v) << name;
+            EXPECT_EQ(c->distribution, e->distribution) << name;
+            EXPECT_EQ(c->two_sided, e->two_sided) << name;
+        } else if (auto* g = std::get_if<DielectricBsdf>(&x)) {
+            auto* e = std::get_if<DielectricBsdf>(&y);
+            EXPECT_EQ(g->eta, e->eta) << name;
+            EXPECT_EQ(g->specular_reflectance, e->specular_reflectance) << name;
+            EXPECT_EQ(g->specular_transmittance, e->specular_transmittance) << name;
+            EXPECT_EQ(g->alpha_u, e->alpha_u) << name;
+            EXPECT_EQ(g->alpha_v, e->alpha_v) << name;
+            EXPECT_EQ(g->distribution, e->distribution) << name;
+        }
+    }
+    ASSERT_EQ(a.shapes.size(), b.shapes.size());
+    for (size_t i = 0; i < a.shapes.size(); ++i) {
+        const ShapeDesc &p = a.shapes[i], &q = b.shapes[i];
+        EXPECT_EQ(p.type, q.type) << i;
+        EXPECT_EQ(p.name, q.name) << i;
+        EXPECT_EQ(p.to_world.m, q.to_world.m) << i;
+        EXPECT_EQ(p.file, q.file) << i;
+        EXPECT_EQ(p.center, q.center) << i;
+        EXPECT_EQ(p.radius, q.radius) << i;
+        EXPECT_EQ(p.material, q.material) << i;
+        EXPECT_EQ(p.flip_normals, q.flip_normals) << i;
+        EXPECT_EQ(p.face_normals, q.face_normals) << i;
+        ASSERT_EQ(p.emitter.has_value(), q.emitter.has_value()) << i;
+        if (p.emitter) {
+            EXPECT_EQ(p.emitter->radiance, q.emitter->radiance) << i;
+            EXPECT_EQ(p.emitter->two_sided, q.emitter->two_sided) << i;
+        }
+    }
+    ASSERT_EQ(a.lights.size(), b.lights.size());
+    for (size_t i = 0; i < a.lights.size(); ++i) {
+        const LightDesc &p = a.lights[i], &q = b.lights[i];
+        EXPECT_EQ(p.type, q.type);
+        EXPECT_EQ(p.position, q.position);
+        EXPECT_EQ(p.intensity, q.intensity);
+        EXPECT_EQ(p.to_world.m, q.to_world.m);
+        EXPECT_EQ(p.cutoff_angle, q.cutoff_angle);
+        EXPECT_EQ(p.beam_width, q.beam_width);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(p.direction[k], q.direction[k], 1e-15);  // renormalised
+        EXPECT_EQ(p.irradiance, q.irradiance);
+        EXPECT_EQ(p.radiance, q.radiance);
+    }
+}
+
+void expect_round_trip(const SceneDesc& d, const std::string& dir = "") {
+    std::string yaml = write_scene_yaml(d, dir);
+    SceneDesc back = parse_scene_string(yaml, (dir.empty() ? std::string("") : dir + "/") + "roundtrip.yaml");
+    SCOPED_TRACE(yaml);
+    expect_same(d, back);
+    std::string again = write_scene_yaml(back, dir);
+    EXPECT_EQ(again.substr(again.find("omega: 1")), yaml.substr(yaml.find("omega: 1")));
+}
+
+const char* kLitBox = R"(<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>)";
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// The two shared scenes
+
+TEST(MitsubaImporter, CornellBox) {
+    if (!have_shared()) GTEST_SKIP() << "no " << kShared;
+    SceneDesc d = import_mitsuba_file(shared_scene("cornell-box"));
+    EXPECT_EQ(d.integrator.type, IntegratorType::Path);
+    EXPECT_EQ(d.integrator.max_depth, 30);  // the file's <default>
+    EXPECT_TRUE(has_warning(d, "scene.xml:11: integrator: integrator 'path_guiding_integrator' is not supported"))
+        << all_warnings(d);
+    EXPECT_EQ(d.warnings.size(), 1u) << all_warnings(d);
+    EXPECT_EQ(d.sensor.type, SensorType::Perspective);
+    EXPECT_FLOAT_EQ(d.sensor.fov, 19.5f);
+    EXPECT_EQ(d.sensor.fov_axis, 'x');
+    expect_mat(d.sensor.to_world, {-1, 0, 0, 0, 0, 1, 0, 1, 0, 0, -1, 6.8, 0, 0, 0, 1});
+    EXPECT_EQ(d.sensor.film.width, 1024);
+    EXPECT_EQ(d.sensor.film.height, 1024);
+    EXPECT_EQ(d.sensor.film.filter, FilterType::Tent);
+    EXPECT_EQ(d.sensor.halt.spp, 64);
+    ASSERT_EQ(d.shapes.size(), 8u);
+    const ShapeDesc& light = d.shapes[7];
+    EXPECT_EQ(light.name, "Light");
+    EXPECT_EQ(light.type, ShapeType::Rectangle);
+    expect_mat(light.to_world, {0.235, -1.66103e-008, -7.80685e-009, -0.005, -2.05444e-008, 3.90343e-009, -0.0893, 1.98,
+                                2.05444e-008, 0.19, 8.30516e-009, -0.03, 0, 0, 0, 1});
+    ASSERT_TRUE(light.emitter);
+    expect_rgb(light.emitter->radiance, 17, 12, 4);
+    EXPECT_FALSE(light.emitter->two_sided);
+    EXPECT_EQ(light.material, "LightBSDF");
+    auto& lb = std::get<DiffuseBsdf>(d.materials.at("LightBSDF").bsdf);
+    expect_rgb(lb.reflectance, 0, 0, 0);
+    EXPECT_TRUE(lb.two_sided);  // wrapped in twosided
+    auto& left = std::get<DiffuseBsdf>(d.materials.at("LeftWallBSDF").bsdf);
+    expect_rgb(left.reflectance, 0.63f, 0.065f, 0.05f);
+    EXPECT_EQ(d.shapes[5].name, "ShortBox");
+    EXPECT_EQ(d.shapes[5].type, ShapeType::Cube);
+    EXPECT_EQ(d.shapes[5].to_world(0, 3), 0.328631);
+    EXPECT_EQ(d.shapes[5].to_world(1, 2), -0.3);
+    // The same scene as the hand translation in scenes/, apart from max_depth (a placeholder).
+    SceneDesc y = parse_scene_file((omega::test::source_root() / "scenes/cornell-box.yaml").string());
+    for (size_t i = 0; i < 8; ++i) EXPECT_EQ(d.shapes[i].to_world.m, y.shapes[i].to_world.m) << i;
+}
+
+TEST(MitsubaImporter, CornellBoxDefinesOverride) {
+    if (!have_shared()) GTEST_SKIP() << "no " << kShared;
+    MitsubaOptions opt;
+    opt.defines = {{"resx", "256"}, {"resy", "128"}, {"max_depth", "65"}, {"integrator", "path"}};
+    SceneDesc d = import_mitsuba_file(shared_scene("cornell-box"), opt);
+    EXPECT_EQ(d.sensor.film.width, 256);
+    EXPECT_EQ(d.sensor.film.height, 128);
+    EXPECT_EQ(d.sensor.film.crop, (std::array<int, 4>{0, 0, 256, 128}));
+    EXPECT_EQ(d.integrator.max_depth, 65);
+    EXPECT_TRUE(d.warnings.empty()) << all_warnings(d);
+}
+
+TEST(MitsubaImporter, VeachMis) {
+    if (!have_shared()) GTEST_SKIP() << "no " << kShared;
+    SceneDesc d = import_mitsuba_file(shared_scene("veach-mis"));
+    EXPECT_EQ(d.sensor.film.width, 1280);
+    EXPECT_EQ(d.sensor.film.height, 720);
+    EXPECT_FLOAT_EQ(d.sensor.fov, 35.f);
+    EXPECT_EQ(d.sensor.to_world(0, 3), 28.2792);
+    ASSERT_EQ(d.shapes.size(), 9u);
+    const std::pair<const char*, float> plates[] = {
+        {"SmoothBSDF", 0.01f}, {"GlossyBSDF", 0.05f}, {"RoughBSDF", 0.1f}, {"SuperRoughBSDF", 0.25f}};
+    for (auto [name, alpha] : plates) {
+        SCOPED_TRACE(name);
+        auto& c = std::get<ConductorBsdf>(d.materials.at(name).bsdf);
+        EXPECT_EQ(c.distribution, MicrofacetType::Beckmann);
+        EXPECT_FLOAT_EQ(c.alpha_u, alpha);
+        EXPECT_FLOAT_EQ(c.alpha_v, alpha);
+        EXPECT_TRUE(c.has_ior);
+        expect_rgb(c.eta, 0.200438f, 0.924033f, 1.10221f);
+        expect_rgb(c.k, 3.91295f, 2.45285f, 2.14219f);
+        expect_rgb(c.specular_reflectance, 0.3f, 0.3f, 0.3f);
+        EXPECT_TRUE(c.two_sided);
+    }
+    const ShapeDesc& small = d.shapes[7];
+    EXPECT_EQ(small.name, "Null_0003");
+    EXPECT_EQ(small.type, ShapeType::Sphere);
+    EXPECT_EQ(small.center, (Vec3d{0, 6.5, 2.7}));
+    EXPECT_EQ(small.radius, 0.05);
+    ASSERT_TRUE(small.emitter);
+    expect_rgb(small.emitter->radiance, 3039.64f, 3039.64f, 3039.64f);
+    EXPECT_EQ(d.shapes[8].name, "SuperRough");
+    EXPECT_EQ(d.shapes[8].to_world(0, 3), 10.6769);
+}
+
+TEST(MitsubaImporter, SharedScenesRoundTripThroughYaml) {
+    if (!have_shared()) GTEST_SKIP() << "no " << kShared;
+    for (const char* name : {"cornell-box", "veach-mis"}) {
+        SCOPED_TRACE(name);
+        expect_round_trip(import_mitsuba_file(shared_scene(name)));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Variables
+
+TEST(MitsubaImporter, DefaultsAndSubstitution) {
+    const std::string body = R"(
+<default name="w" value="64"/>
+<default name="wh" value="32"/>
+<default name="r" value="0.25"/>
+<sensor type="perspective"><float name="fov" value="1$r"/>
+  <film type="hdrfilm"><integer name="width" value="$w"/><integer name="height" value="$wh"/></film></sensor>
+<bsdf type="diffuse" id="a"><rgb name="reflectance" value="$r, 0.5, $r"/></bsdf>
+<shape type="sphere"><ref id="a"/></shape>)" + std::string(kLitBox);
+    SceneDesc d = import(body);
+    EXPECT_EQ(d.sensor.film.width, 64);
+    EXPECT_EQ(d.sensor.film.height, 32);  // $wh is not $w followed by "h"
+    EXPECT_FLOAT_EQ(d.sensor.fov, 10.25f);
+    expect_rgb(std::get<DiffuseBsdf>(d.materials.at("a").bsdf).reflectance, 0.25f, 0.5f, 0.25f);
+    MitsubaOptions opt;
+    opt.defines = {{"w", "100"}};
+    EXPECT_EQ(import(body, opt).sensor.film.width, 100);
+    opt.defines = {{"nope", "1"}};
+    EXPECT_TRUE(has_warning(import(body, opt), "define nope=1 is not used"));
+}
+
+TEST(MitsubaImporter, UndefinedVariableIsAnErrorWithItsLine) {
+    EXPECT_EQ(import_error("\n<shape type=\"sphere\">\n<float name=\"radius\" value=\"$rad\"/></shape>"),
+              "scene.xml:4: shape[0].radius: undefined variable $rad (add <default name=\"rad\" value=\"...\"/>)");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Transforms
+
+Mat4 shape_matrix(const std::string& ops) {
+    SceneDesc d = import("<shape type=\"cube\"><transform name=\"to_world\">" + ops + "</transform></shape>" + kLitBox);
+    return d.shapes.at(0).to_world;
+}
+
+TEST(MitsubaImporter, TransformKinds) {
+    expect_mat(shape_matrix(R"(<translate x="1" y="2" z="3"/>)"), {1, 0, 0, 1, 0, 1, 0, 2, 0, 0, 1, 3, 0, 0, 0, 1});
+    expect_mat(shape_matrix(R"(<translate value="1 2 3"/>)"), {1, 0, 0, 1, 0, 1, 0, 2, 0, 0, 1, 3, 0, 0, 0, 1});
+    expect_mat(shape_matrix(R"(<scale value="2"/>)"), {2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1});
+    expect_mat(shape_matrix(R"(<scale x="2" z="3"/>)"), {2, 0, 0, 0, 0, 1, 0, 0, 0, 0, 3, 0, 0, 0, 0, 1});
+    expect_mat(shape_matrix(R"(<rotate y="1" angle="90"/>)"), {0, 0, 1, 0, 0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 0, 1}, 1e-15);
+    expect_mat(shape_matrix(R"(<rotate value="0, 0, 1" angle="90"/>)"), {0, -1, 0, 0, 1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1},
+               1e-15);
+    expect_mat(shape_matrix(R"(<matrix value="1 0 0 5  0 2 0 6  0 0 3 7  0 0 0 1"/>)"),
+               {1, 0, 0, 5, 0, 2, 0, 6, 0, 0, 3, 7, 0, 0, 0, 1});
+    // Mitsuba's lookat: +z towards the target, +x = up x dir.
+    expect_mat(shape_matrix(R"(<lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/>)"),
+               {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -1, 5, 0, 0, 0, 1}, 1e-15);
+    // Applied in order, the first to the points first: translate after scale = T * S.
+    expect_mat(shape_matrix(R"(<scale value="2"/><translate x="1"/>)"), {2, 0, 0, 1, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1});
+    expect_mat(shape_matrix(R"(<translate x="1"/><scale value="2"/>)"), {2, 0, 0, 2, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1});
+}
+
+TEST(MitsubaImporter, BadTransformsAreErrors) {
+    EXPECT_EQ(import_error("<shape type=\"cube\">\n<transform name=\"to_world\"><scale value=\"0\"/></transform></shape>"),
+              "scene.xml:3: shape[0].to_world: matrix is singular");
+    EXPECT_EQ(import_error("<shape type=\"cube\">\n<transform name=\"to_world\">\n<matrix value=\"1 2 3\"/></transform></shape>"),
+              "scene.xml:4: shape[0].to_world: <matrix> needs 16 numbers, got 3");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plugins
+
+TEST(MitsubaImporter, MaterialsMapToOmegaBsdfs) {
+    SceneDesc d = import(R"(
+<bsdf type="conductor" id="mirror"/>
+<bsdf type="conductor" id="gold"><string name="material" value="Au"/></bsdf>
+<bsdf type="roughconductor" id="rough"/>
+<bsdf type="roughconductor" id="ggx"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.2"/>
+  <string name="distribution" value="ggx"/></bsdf>
+<bsdf type="dielectric" id="glass"><string name="int_ior" value="water"/><float name="ext_ior" value="1"/></bsdf>
+<bsdf type="roughdielectric" id="frosted"><float name="int_ior" value="1.5"/><float name="alpha" value="0.3"/></bsdf>
+<bsdf type="diffuse" id="onesided"/>
+<shape type="cube"><ref id="mirror"/></shape>
+<shape type="cube"><ref id="gold"/></shape>
+<shape type="cube"><ref id="rough"/></shape>
+<shape type="cube"><ref id="ggx"/></shape>
+<shape type="cube"><ref id="glass"/></shape>
+<shape type="cube"><ref id="frosted"/></shape>
+<shape type="cube"><ref name="bsdf" id="onesided"/></shape>
+<shape type="cube"/>
+)" + std::string(kLitBox));
+    auto& mirror = std::get<ConductorBsdf>(d.materials.at("mirror").bsdf);
+    EXPECT_FALSE(mirror.has_ior);  // Mitsuba 3's default material "none": a perfect mirror
+    EXPECT_EQ(mirror.alpha_u, 0.f);
+    EXPECT_FALSE(mirror.two_sided);  // one-sided unless wrapped in twosided
+    EXPECT_TRUE(std::get<ConductorBsdf>(d.materials.at("gold").bsdf).has_ior);
+    auto& rough = std::get<ConductorBsdf>(d.materials.at("rough").bsdf);
+    EXPECT_FLOAT_EQ(rough.alpha_u, 0.1f);  // Mitsuba's defaults
+    EXPECT_EQ(rough.distribution, MicrofacetType::Beckmann);
+    auto& ggx = std::get<ConductorBsdf>(d.materials.at("ggx").bsdf);
+    EXPECT_FLOAT_EQ(ggx.alpha_u, 0.1f);
+    EXPECT_FLOAT_EQ(ggx.alpha_v, 0.2f);
+    EXPECT_EQ(ggx.distribution, MicrofacetType::GGX);
+    EXPECT_FLOAT_EQ(std::get<DielectricBsdf>(d.materials.at("glass").bsdf).eta, 1.333f);
+    auto& frosted = std::get<DielectricBsdf>(d.materials.at("frosted").bsdf);
+    EXPECT_FLOAT_EQ(frosted.eta, 1.5f / 1.000277f);
+    EXPECT_FLOAT_EQ(frosted.alpha_u, 0.3f);
+    EXPECT_FALSE(std::get<DiffuseBsdf>(d.materials.at("onesided").bsdf).two_sided);
+    auto& def = std::get<DiffuseBsdf>(d.materials.at(d.shapes[7].material).bsdf);
+    expect_rgb(def.reflectance, 0.5f, 0.5f, 0.5f);
+    EXPECT_FALSE(def.two_sided);
+    ASSERT_EQ(d.warnings.size(), 1u) << all_warnings(d);
+    EXPECT_EQ(d.warnings[0], "scene.xml:1: scene: no <sensor>: using Omega's default camera");
+    expect_round_trip(d);
+}
+
+TEST(MitsubaImporter, ValueErrorsNameTheParameterLine) {
+    EXPECT_EQ(import_error("<bsdf type=\"roughconductor\" id=\"x\">\n\n<float name=\"alpha\" value=\"2\"/></bsdf>\n"
+                           "<shape type=\"cube\"><ref id=\"x\"/></shape>"),
+              "scene.xml:4: bsdf(x).alpha: must be in [0, 1], got 2");
+    EXPECT_EQ(import_error("<shape type=\"cube\"><ref id=\"missing\"/></shape>"),
+              "scene.xml:2: shape[0]: reference to an unknown id 'missing'");
+    EXPECT_EQ(import_error("<shape type=\"obj\">\n<string name=\"filename\" value=\"nope.obj\"/></shape>"),
+              "scene.xml:3: shape[0].filename: cannot open 'nope.obj'");
+}
+
+TEST(MitsubaImporter, EmittersAndSensors) {
+    SceneDesc d = import(R"(
+<sensor type="thinlens"><float name="fov" value="40"/><string name="fov_axis" value="y"/>
+  <float name="aperture_radius" value="0.1"/><float name="focus_distance" value="3"/>
+  <film type="hdrfilm"><integer name="width" value="200"/><integer name="height" value="100"/>
+    <rfilter type="gaussian"><float name="stddev" value="0.3"/></rfilter></film></sensor>
+<emitter type="point"><point name="position" x="1" y="2" z="3"/><rgb name="intensity" value="5"/></emitter>
+<emitter type="spot"><transform name="to_world"><lookat origin="0,5,0" target="0,0,0" up="0,0,1"/></transform>
+  <rgb name="intensity" value="10"/><float name="cutoff_angle" value="30"/></emitter>
+<emitter type="directional"><vector name="direction" x="0" y="-2" z="0"/><spectrum name="irradiance" value="3"/></emitter>
+<emitter type="constant"><rgb name="radiance" value="0.1, 0.2, 0.3"/></emitter>
+)");
+    EXPECT_EQ(d.sensor.type, SensorType::ThinLens);
+    EXPECT_EQ(d.sensor.fov_axis, 'y');
+    EXPECT_FLOAT_EQ(d.sensor.aperture_radius, 0.1f);
+    EXPECT_FLOAT_EQ(d.sensor.focus_distance, 3.f);
+    EXPECT_EQ(d.sensor.film.filter, FilterType::Gaussian);
+    EXPECT_FLOAT_EQ(d.sensor.film.gaussian_stddev, 0.3f);
+    ASSERT_EQ(d.lights.size(), 4u);
+    EXPECT_EQ(d.lights[0].position, (Vec3d{1, 2, 3}));
+    expect_rgb(d.lights[0].intensity, 5, 5, 5);
+    EXPECT_EQ(d.lights[1].type, LightType::Spot);
+    EXPECT_FLOAT_EQ(d.lights[1].cutoff_angle, 30.f);
+    EXPECT_FLOAT_EQ(d.lights[1].beam_width, 22.5f);
+    EXPECT_NEAR(d.lights[1].to_world(1, 2), -1, 1e-15);  // looks down
+    EXPECT_EQ(d.lights[2].direction, (Vec3d{0, -1, 0}));
+    expect_rgb(d.lights[3].radiance, 0.1f, 0.2f, 0.3f);
+    EXPECT_TRUE(d.warnings.empty()) << all_warnings(d);
+    expect_round_trip(d);
+
+    // fov_axis diagonal: converted to the horizontal field of view.
+    SceneDesc o = import(R"(<sensor type="perspective"><float name="fov" value="90"/><string name="fov_axis" value="diagonal"/>
+  <film type="hdrfilm"><integer name="width" value="300"/><integer name="height" value="400"/></film></sensor>)" +
+                         std::string(kLitBox));
+    EXPECT_NEAR(o.sensor.fov, 2 * std::atan(0.6) * 180 / 3.14159265358979, 1e-4);
+    EXPECT_EQ(o.sensor.film.filter, FilterType::Gaussian);  // Mitsuba's default filter
+    SceneDesc ortho = import(R"(<sensor type="orthographic"><transform name="to_world"><scale value="3"/></transform></sensor>)" +
+                             std::string(kLitBox));
+    EXPECT_EQ(ortho.sensor.type, SensorType::Orthographic);
+    EXPECT_EQ(ortho.sensor.to_world(0, 0), 3);
+}
+
+TEST(MitsubaImporter, MeshesResolveAgainstTheSceneFolder) {
+    TempDir dir;
+    dir.write("meshes/tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    auto xml = dir.write("scene.xml", R"(<scene version="3.0.0">
+<shape type="obj"><string name="filename" value="meshes/tri.obj"/><boolean name="face_normals" value="true"/></shape>
+<shape type="ply"><string name="filename" value="meshes/tri.obj"/><boolean name="flip_normals" value="true"/></shape>
+)" + std::string(kLitBox) + "</scene>");
+    SceneDesc d = import_mitsuba_file(xml.string());
+    ASSERT_EQ(d.shapes.size(), 3u);
+    EXPECT_EQ(d.shapes[0].type, ShapeType::Mesh);
+    EXPECT_EQ(d.shapes[0].file, (dir.path / "meshes/tri.obj").lexically_normal().string());
+    EXPECT_TRUE(d.shapes[0].face_normals);
+    EXPECT_TRUE(d.shapes[1].flip_normals);
+    // Written relative to the YAML's folder, and read back to the same absolute path.
+    std::string yaml = write_scene_yaml(d, dir.path.string());
+    EXPECT_NE(yaml.find("file: \"meshes/tri.obj\""), std::string::npos) << yaml;
+    expect_round_trip(d, dir.path.string());
+}
+
+TEST(MitsubaImporter, BitmapIsAveragedWithAWarning) {
+    TempDir dir;
+    // A 2x1 8-bit PPM: red and black. sRGB-decoded average: (0.5, 0, 0).
+    std::string ppm = "P6\n2 1\n255\n";
+    ppm += std::string("\xff\x00\x00\x00\x00\x00", 6);
+    dir.write("tex.ppm", ppm);
+    auto xml = dir.write("scene.xml", R"(<scene version="3.0.0">
+<texture type="bitmap" id="t"><string name="filename" value="tex.ppm"/></texture>
+<bsdf type="diffuse" id="inline"><texture type="bitmap" name="reflectance"><string name="filename" value="tex.ppm"/></texture></bsdf>
+<bsdf type="diffuse" id="byref"><ref name="reflectance" id="t"/></bsdf>
+<shape type="cube"><ref id="inline"/></shape>
+<shape type="cube"><ref id="byref"/></shape>
+)" + std::string(kLitBox) + "</scene>");
+    SceneDesc d = import_mitsuba_file(xml.string());
+    for (const char* m : {"inline", "byref"}) expect_rgb(std::get<DiffuseBsdf>(d.materials.at(m).bsdf).reflectance, 0.5f, 0, 0);
+    EXPECT_TRUE(has_warning(d, "bitmap 'tex.ppm': Omega has no textures yet; using its average colour")) << all_warnings(d);
+}
+
+TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
+    SceneDesc d = import(R"(
+<integrator type="volpath"><boolean name="hide_emitters" value="true"/><integer name="samples_per_pass" value="4"/></integrator>
+<sensor type="radiancemeter"><float name="fov" value="30"/><float name="far_clip" value="100"/><string name="focal_length" value="35mm"/>
+  <sampler type="stratified"><integer name="sample_count" value="16"/></sampler>
+  <film type="specfilm"><string name="pixel_format" value="luminance"/><boolean name="banner" value="false"/>
+    <rfilter type="mitchell"/></film></sensor>
+<medium type="homogeneous" id="fog"/>
+<include filename="other.xml"/>
+<bsdf type="plastic" id="p"><rgb name="diffuse_reflectance" value="0.2"/></bsdf>
+<bsdf type="roughplastic" id="rp"/>
+<bsdf type="thindielectric" id="thin"/>
+<bsdf type="null" id="n"/>
+<bsdf type="hair" id="h"/>
+<bsdf type="bumpmap" id="bump"><texture type="bitmap" name="arbitrary"><string name="filename" value="x.png"/></texture>
+  <bsdf type="diffuse"/></bsdf>
+<bsdf type="diffuse" id="extra"><float name="roughness" value="0.5"/></bsdf>
+<bsdf type="diffuse" id="unused"/>
+<shape type="cube"><ref id="p"/></shape>
+<shape type="cube"><ref id="rp"/></shape>
+<shape type="cube"><ref id="thin"/></shape>
+<shape type="cube"><ref id="n"/></shape>
+<shape type="cube"><ref id="h"/></shape>
+<shape type="cube"><ref id="bump"/></shape>
+<shape type="cube"><ref id="extra"/><ref name="interior" id="fog"/></shape>
+<shape type="serialized"><string name="filename" value="x.serialized"/></shape>
+<shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/><float name="sampling_weight" value="2"/></emitter></shape>
+<emitter type="projector"/>
+<emitter type="point"><rgb name="intensity" value="1"/><float name="bogus" value="1"/></emitter>
+<shape type="cube"><spectrum name="weird" value="400:0.1, 500:0.2"/></shape>
+)");
+    const char* expected[] = {
+        "integrator: integrator 'volpath' is not supported",
+        "integrator: hide_emitters is not supported",
+        "integrator: parameter 'samples_per_pass' (<integer>) is not supported and was ignored",
+        "sensor: sensor 'radiancemeter' is not supported",
+        "sensor: far_clip is not supported",
+        "sensor: parameter 'focal_length' (<string>) is not supported",
+        "sensor.sampler: sampler 'stratified' is replaced",
+        "sensor.film: film 'specfilm' is not supported",
+        "sensor.film: pixel_format 'luminance' is not supported",
+        "sensor.film: parameter 'banner' (<boolean>) is not supported",
+        "sensor.film.rfilter: reconstruction filter 'mitchell' is not supported",
+        "medium: <medium type=\"homogeneous\"> is not supported and was ignored",
+        "include: <include> is not supported and was ignored",
+        "bsdf(p): plastic is approximated by a diffuse BSDF",
+        "bsdf(rp): roughplastic is approximated by a diffuse BSDF",
+        "bsdf(thin): thindielectric is approximated by a dielectric",
+        "bsdf(n): the null BSDF",
+        "bsdf(h): BSDF 'hair' is not supported; using a grey diffuse",
+        "bsdf(bump): BSDF 'bumpmap' is not supported; using its nested BSDF",
+        "bsdf(extra): parameter 'roughness' (<float>) is not supported",
+        "bsdf(unused): never used by any shape",
+        "shape[6]: parameter 'interior' (<ref>) is not supported and was ignored",
+        "shape[7]: shape 'serialized' is not supported; it was skipped",
+        "shape[8].emitter: sampling_weight is ignored",
+        "emitter[0]: emitter 'projector' is not supported; it was skipped",
+        "emitter[1]: parameter 'bogus' (<float>) is not supported",
+        "shape[9]: parameter 'weird' (<spectrum>) is not supported",
+    };
+    for (const char* w : expected) EXPECT_TRUE(has_warning(d, w)) << w << "\nin:\n" << all_warnings(d);
+    EXPECT_EQ(d.warnings.size(), std::size(expected)) << all_warnings(d);
+    // The approximations themselves.
+    expect_rgb(std::get<DiffuseBsdf>(d.materials.at("p").bsdf).reflectance, 0.2f, 0.2f, 0.2f);
+    EXPECT_TRUE(std::holds_alternative<DielectricBsdf>(d.materials.at("thin").bsdf));
+    EXPECT_TRUE(std::holds_alternative<BlackBsdf>(d.materials.at("n").bsdf));
+    EXPECT_EQ(d.integrator.type, IntegratorType::Path);
+    EXPECT_EQ(d.sensor.halt.spp, 16);
+    expect_round_trip(d);
+}
+
+TEST(MitsubaImporter, MalformedXmlIsASceneErrorWithItsLine) {
+    EXPECT_EQ(scene_error_of([] { import_mitsuba_string("<scene>\n<shape type=\"cube\">\n</scene>\n", "bad.xml"); }),
+              "bad.xml:3: invalid XML: Start-end tags mismatch");
+    EXPECT_EQ(scene_error_of([] { import_mitsuba_string("<notascene/>", "bad.xml"); }),
+              "bad.xml:1: scene: the root element must be <scene>");
+    EXPECT_EQ(scene_error_of([] { import_mitsuba_string("\n\n<scene><shape type=\"cube\"", "bad.xml"); }).substr(0, 10),
+              "bad.xml:3:");
+    EXPECT_EQ(scene_error_of([] { import_mitsuba_file("/nonexistent/scene.xml"); }),
+              "/nonexistent/scene.xml: cannot open the scene file");
+}
+
+TEST(MitsubaImporter, LoadSceneFileDispatchesOnExtension) {
+    EXPECT_TRUE(is_mitsuba_path("a/b/Scene.XML"));
+    EXPECT_FALSE(is_mitsuba_path("scene.yaml"));
+    MitsubaOptions opt;
+    opt.defines = {{"x", "1"}};
+    EXPECT_EQ(scene_error_of([&] { load_scene_file("scene.yaml", opt); }),
+              "scene.yaml: -D x=...: defines only apply to Mitsuba XML scenes");
+}

@@ -1,0 +1,198 @@
+#include "scene/scene_writer.h"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+namespace omega {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Shortest text that reads back (as the parser reads it: double, then float) to exactly f.
+std::string num(float f) {
+    std::string s = fmt::format("{}", f);
+    double d = 0;
+    std::from_chars(s.data(), s.data() + s.size(), d);
+    if (float(d) != f) s = fmt::format("{}", double(f));  // exact: every float is a double
+    return s;
+}
+std::string num(double d) { return fmt::format("{}", d); }  // shortest round-trip form
+
+std::string rgb(const Rgb& c) { return fmt::format("[{}, {}, {}]", num(c.x), num(c.y), num(c.z)); }
+std::string vec(const Vec3d& v) { return fmt::format("[{}, {}, {}]", num(v.x), num(v.y), num(v.z)); }
+std::string matrix(const Mat4& m) {
+    std::string s = "{matrix: [";
+    for (size_t i = 0; i < 16; ++i) s += (i ? ", " : "") + num(m.m[i]);
+    return s + "]}";
+}
+bool is_identity(const Mat4& m) { return m.m == Mat4{}.m; }
+
+// A YAML double-quoted string.
+std::string q(const std::string& s) {
+    std::string out = "\"";
+    for (unsigned char c : s) {
+        if (c == '"') out += "\\\"";
+        else if (c == '\\') out += "\\\\";
+        else if (c < 0x20 || c == 0x7f) out += fmt::format("\\x{:02x}", c);
+        else out += char(c);
+    }
+    return out + "\"";
+}
+
+const char* dist(MicrofacetType t) { return t == MicrofacetType::Beckmann ? "beckmann" : "ggx"; }
+
+std::string alpha(float au, float av) {
+    if (au == av) return fmt::format(", alpha: {}", num(au));
+    return fmt::format(", alpha_u: {}, alpha_v: {}", num(au), num(av));
+}
+
+std::string material(const Bsdf& b) {
+    if (auto* d = std::get_if<DiffuseBsdf>(&b))
+        return fmt::format("{{type: diffuse, reflectance: {}, two_sided: {}}}", rgb(d->reflectance), d->two_sided);
+    if (auto* c = std::get_if<ConductorBsdf>(&b)) {
+        std::string s = "{type: conductor";
+        if (c->has_ior) s += fmt::format(", eta: {}, k: {}", rgb(c->eta), rgb(c->k));
+        s += fmt::format(", specular_reflectance: {}", rgb(c->specular_reflectance));
+        s += alpha(c->alpha_u, c->alpha_v);
+        return s + fmt::format(", distribution: {}, two_sided: {}}}", dist(c->distribution), c->two_sided);
+    }
+    if (auto* d = std::get_if<DielectricBsdf>(&b)) {
+        // int_ior / ext_ior reproduces eta exactly with ext_ior 1.
+        return fmt::format(
+            "{{type: dielectric, int_ior: {}, ext_ior: 1, specular_reflectance: {}, specular_transmittance: {}{}, "
+            "distribution: {}}}",
+            num(d->eta), rgb(d->specular_reflectance), rgb(d->specular_transmittance), alpha(d->alpha_u, d->alpha_v),
+            dist(d->distribution));
+    }
+    return "{type: black}";
+}
+
+const char* shape_type(ShapeType t) {
+    switch (t) {
+        case ShapeType::Mesh: return "mesh";
+        case ShapeType::Rectangle: return "rectangle";
+        case ShapeType::Cube: return "cube";
+        case ShapeType::Sphere: return "sphere";
+        case ShapeType::Disk: return "disk";
+    }
+    return "?";
+}
+
+const char* filter_name(FilterType f) {
+    switch (f) {
+        case FilterType::Box: return "box";
+        case FilterType::Tent: return "tent";
+        case FilterType::Gaussian: return "gaussian";
+    }
+    return "?";
+}
+
+}  // namespace
+
+std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
+    std::string o;
+    o += "# Scene format v1, written by omega";
+    if (!d.path.empty()) o += " from " + d.path;
+    o += "\n";
+    for (const std::string& w : d.warnings) {
+        std::string line = w;
+        for (char& c : line)
+            if (c == '\n' || c == '\r') c = ' ';
+        o += "# warning: " + line + "\n";
+    }
+    o += "omega: 1\n";
+
+    const IntegratorDesc& it = d.integrator;
+    const char* itype = it.type == IntegratorType::Path ? "path" : it.type == IntegratorType::Light ? "light" : "bdpt";
+    o += fmt::format("integrator: {{type: {}, max_depth: {}, rr_depth: {}}}\n", itype, it.max_depth, it.rr_depth);
+
+    const SensorDesc& s = d.sensor;
+    o += "sensor:\n";
+    const char* stype = s.type == SensorType::Perspective ? "perspective"
+                        : s.type == SensorType::ThinLens  ? "thin_lens"
+                                                          : "orthographic";
+    o += fmt::format("  type: {}\n", stype);
+    if (s.type != SensorType::Orthographic) o += fmt::format("  fov: {}\n  fov_axis: {}\n", num(s.fov), s.fov_axis);
+    if (s.type == SensorType::ThinLens)
+        o += fmt::format("  aperture_radius: {}\n  focus_distance: {}\n", num(s.aperture_radius), num(s.focus_distance));
+    o += fmt::format("  to_world: {}\n", matrix(s.to_world));
+    if (s.near_clip != 0) o += fmt::format("  near_clip: {}\n", num(s.near_clip));
+    const FilmDesc& f = s.film;
+    o += fmt::format("  film: {{width: {}, height: {}, filter: {}", f.width, f.height, filter_name(f.filter));
+    if (f.filter == FilterType::Gaussian) o += fmt::format(", stddev: {}", num(f.gaussian_stddev));
+    if (f.has_crop) o += fmt::format(", crop: [{}, {}, {}, {}]", f.crop[0], f.crop[1], f.crop[2], f.crop[3]);
+    o += "}\n";
+    if (s.halt.spp) o += fmt::format("  spp: {}\n", *s.halt.spp);
+    if (s.halt.time_s) o += fmt::format("  time: {}\n", num(*s.halt.time_s));
+    if (s.halt.target_error) o += fmt::format("  target_error: {}\n", num(*s.halt.target_error));
+
+    // The parser's implicit default material is not written: shapes without `material` get it back.
+    const std::string implicit = "(default)";
+    bool any_material = false;
+    for (const auto& [name, m] : d.materials) {
+        if (name == implicit) continue;
+        if (!any_material) o += "materials:\n";
+        any_material = true;
+        o += fmt::format("  {}: {}\n", q(name), material(m.bsdf));
+    }
+
+    if (!d.shapes.empty()) o += "shapes:\n";
+    for (const ShapeDesc& sh : d.shapes) {
+        o += fmt::format("  - type: {}\n", shape_type(sh.type));
+        if (!sh.name.empty()) o += fmt::format("    name: {}\n", q(sh.name));
+        if (!is_identity(sh.to_world)) o += fmt::format("    to_world: {}\n", matrix(sh.to_world));
+        if (sh.type == ShapeType::Sphere) o += fmt::format("    center: {}\n    radius: {}\n", vec(sh.center), num(sh.radius));
+        if (sh.type == ShapeType::Mesh) {
+            std::string file = sh.file;
+            if (!base_dir.empty()) {
+                std::error_code ec;
+                fs::path rel = fs::relative(fs::path(sh.file), fs::absolute(fs::path(base_dir), ec), ec);
+                if (!ec && !rel.empty()) file = rel.generic_string();
+            }
+            o += fmt::format("    file: {}\n", q(file));
+            if (sh.face_normals) o += "    face_normals: true\n";
+            if (sh.drop_degenerate) o += "    drop_degenerate: true\n";
+        }
+        if (sh.material != implicit) o += fmt::format("    material: {}\n", q(sh.material));
+        if (sh.flip_normals) o += "    flip_normals: true\n";
+        if (sh.emitter)
+            o += fmt::format("    emitter: {{type: area, radiance: {}, two_sided: {}}}\n", rgb(sh.emitter->radiance),
+                             sh.emitter->two_sided);
+    }
+
+    if (!d.lights.empty()) o += "lights:\n";
+    for (const LightDesc& l : d.lights) {
+        switch (l.type) {
+            case LightType::Point:
+                o += fmt::format("  - {{type: point, position: {}, intensity: {}}}\n", vec(l.position), rgb(l.intensity));
+                break;
+            case LightType::Spot:
+                o += fmt::format("  - {{type: spot, to_world: {}, intensity: {}, cutoff_angle: {}, beam_width: {}}}\n",
+                                 matrix(l.to_world), rgb(l.intensity), num(l.cutoff_angle), num(l.beam_width));
+                break;
+            case LightType::Directional:
+                o += fmt::format("  - {{type: directional, direction: {}, irradiance: {}}}\n", vec(l.direction),
+                                 rgb(l.irradiance));
+                break;
+            case LightType::Constant: o += fmt::format("  - {{type: constant, radiance: {}}}\n", rgb(l.radiance)); break;
+        }
+    }
+    return o;
+}
+
+void write_scene_file(const SceneDesc& desc, const std::string& path) {
+    fs::path dir = fs::path(path).parent_path();
+    std::string text = write_scene_yaml(desc, dir.empty() ? "." : dir.string());
+    std::ofstream out(path, std::ios::binary);
+    if (!out) throw std::runtime_error("cannot write '" + path + "'");
+    out << text;
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write '" + path + "'");
+}
+
+}  // namespace omega

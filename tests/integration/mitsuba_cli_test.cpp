@@ -1,0 +1,137 @@
+// `omega import`, `omega render scene.xml` and `omega converge` as a user runs them.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "film/film.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+    int code = -1;
+    std::string output;  // stdout and stderr
+};
+
+Result run_omega(const std::string& args) {
+    std::string cmd = std::string(OMEGA_BIN) + " " + args + " 2>&1";
+    Result r;
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+    int status = pclose(p);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+// A small lit box in Mitsuba 3 XML, with variables.
+const char* kXml = R"(<scene version="3.0.0">
+  <default name="res" value="16"/>
+  <default name="max_depth" value="4"/>
+  <integrator type="path"><integer name="max_depth" value="$max_depth"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="40"/>
+    <transform name="to_world"><lookat origin="0, 0, -3" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="$res"/><integer name="height" value="$res"/><rfilter type="tent"/></film>
+  </sensor>
+  <bsdf type="twosided" id="white"><bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf></bsdf>
+  <shape type="cube"><transform name="to_world"><scale value="0.5"/><rotate y="1" angle="30"/></transform><ref id="white"/></shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="1.5"/></transform>
+    <emitter type="area"><rgb name="radiance" value="5"/></emitter>
+  </shape>
+  <emitter type="constant"><rgb name="radiance" value="0.2"/></emitter>
+</scene>
+)";
+
+class MitsubaCli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() / fs::path("omega_mitsuba_cli_" + std::to_string(::getpid()) + "_" +
+                                                    ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(dir_);
+        xml_ = write("scene.xml", kXml);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+    std::string write(const std::string& name, const std::string& text) {
+        fs::path p = dir_ / name;
+        std::ofstream(p) << text;
+        return p.string();
+    }
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+    fs::path dir_;
+    std::string xml_;
+};
+
+}  // namespace
+
+TEST_F(MitsubaCli, ImportedYamlRendersTheSameImageAsTheXml) {
+    Result imp = run_omega("import " + xml_ + " -o " + path("scene.yaml"));
+    ASSERT_EQ(imp.code, 0) << imp.output;
+    Result a = run_omega("render " + xml_ + " -q --spp 2 -o " + path("a.exr"));
+    ASSERT_EQ(a.code, 0) << a.output;
+    Result b = run_omega("render " + path("scene.yaml") + " -q --spp 2 -o " + path("b.exr"));
+    ASSERT_EQ(b.code, 0) << b.output;
+    omega::ExrImage ia = omega::read_exr(path("a.exr")), ib = omega::read_exr(path("b.exr"));
+    EXPECT_EQ(ia.width, 16);
+    EXPECT_EQ(ia.rgb, ib.rgb);
+    double sum = 0;
+    for (float v : ia.rgb) sum += v;
+    EXPECT_GT(sum, 0);
+}
+
+TEST_F(MitsubaCli, DefinesOverrideDefaults) {
+    Result r = run_omega("render " + xml_ + " -q --spp 1 -D res=8 -o " + path("a.exr"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_EQ(omega::read_exr(path("a.exr")).width, 8);
+    Result bad = run_omega("render " + xml_ + " -q --spp 1 -D res -o " + path("a.exr"));
+    EXPECT_EQ(bad.code, 2);
+    EXPECT_NE(bad.output.find("-D res: expected name=value"), std::string::npos) << bad.output;
+}
+
+TEST_F(MitsubaCli, BadXmlIsExitCode2WithFileAndLine) {
+    std::string bad = write("bad.xml", "<scene version=\"3.0.0\">\n<shape type=\"cube\">\n</scene>\n");
+    for (const char* cmd : {"render ", "import "}) {
+        Result r = run_omega(cmd + bad);
+        EXPECT_EQ(r.code, 2) << r.output;
+        EXPECT_NE(r.output.find("bad.xml:3: invalid XML"), std::string::npos) << r.output;
+    }
+}
+
+TEST_F(MitsubaCli, ConvergeMeasuresPathAndReportsRefusedIntegrators) {
+    Result r = run_omega("converge " + xml_ + " --integrators path,bdpt --budget 2 --runs 2 --reference-time 1 --threads 1 --out-dir " +
+                     path("conv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("no --reference: rendering one with the path tracer"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("integrator 'bdpt' is not available"), std::string::npos) << r.output;
+    EXPECT_TRUE(fs::exists(path("conv/reference.exr")));
+    std::ifstream csv(path("conv/path.csv"));
+    std::string header, row1, row2;
+    std::getline(csv, header);
+    std::getline(csv, row1);
+    std::getline(csv, row2);
+    EXPECT_EQ(header.rfind("time_target_s,runs,time_s,spp,rmse,rmse_sd,relmse", 0), 0u) << header;
+    EXPECT_EQ(row1.rfind("1,2,", 0), 0u) << row1;
+    EXPECT_EQ(row2.rfind("2,2,", 0), 0u) << row2;
+    EXPECT_TRUE(fs::exists(path("conv/path_runs.csv")));
+    EXPECT_TRUE(fs::exists(path("conv/convergence.gp")));
+    if (std::system("command -v gnuplot > /dev/null 2>&1") == 0) {
+        EXPECT_TRUE(fs::exists(path("conv/convergence.png")));
+    }
+}
+
+TEST_F(MitsubaCli, ConvergeWithOnlyRefusedIntegratorsIsExitCode2) {
+    Result r = run_omega("converge " + xml_ + " --integrators light --budget 1 --runs 1 --reference-time 1 --threads 1 --out-dir " +
+                     path("conv"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("integrator 'light' is not available"), std::string::npos) << r.output;
+}
