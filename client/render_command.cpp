@@ -11,6 +11,7 @@
 #include "import_command.h"
 #include "integrator/render_session.h"
 #include "progress_bar.h"
+#include "pathspace/classify.h"
 #include "scene/scene.h"
 #include "scene/scene_error.h"
 #include "scene/mitsuba_importer.h"
@@ -76,6 +77,8 @@ int run_render(const RenderArgs& a) {
         fmt::print(stderr, "omega: {}\n", e.what());
         return 2;
     }
+    // What the scene can produce but this integrator cannot sample, in full-path notation.
+    for (auto& w : path_space_warnings(*scene, desc.integrator.type)) desc.warnings.push_back(std::move(w));
     for (const auto& w : desc.warnings) fmt::print(stderr, "omega: warning: {}\n", w);
 
     RenderSettings rs;

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "integrator/render_session.h"
+#include "pathspace/classify.h"
 #include "scene/scene.h"
 #include "scene/scene_error.h"
 
@@ -98,6 +99,8 @@ void RenderWorker::run() {
   try {
     SceneDesc desc = load_job_scene(spec_.paths, spec_.name, spec_.integrator, spec_.allowed_roots);
     std::unique_ptr<Scene> scene = Scene::build(desc);
+    // Path classes this integrator cannot sample go with the result like any other warning.
+    for (auto& w : path_space_warnings(*scene, desc.integrator.type)) desc.warnings.push_back(std::move(w));
 
     std::shared_ptr<const FilmSnapshot> resume = spec_.resume;
     if (!resume) {

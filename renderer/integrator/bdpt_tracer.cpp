@@ -8,11 +8,11 @@ constexpr int kMaxUnboundedVertices = 1 << 16;
 }  // namespace
 
 BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
-    : scene_(scene), set_{desc.type}, max_depth_(desc.max_depth) {
+    : scene_(scene), set_{desc.type}, plan_(plan_strategies(scene)), max_depth_(desc.max_depth) {
     const int md = desc.max_depth < 0 ? kMaxUnboundedVertices : desc.max_depth;
     // k = s + t - 1 <= max_depth: t <= max_depth + 1 (s = 0), s <= max_depth (t = 1).
     camera_limits_ = {desc.type == IntegratorType::Light ? 0 : md + 1, desc.rr_depth + 1};
-    light_limits_ = {desc.type == IntegratorType::Path ? 0 : md, desc.rr_depth};
+    light_limits_ = {desc.type == IntegratorType::Path || !plan_.light_subpaths ? 0 : md, desc.rr_depth};
 }
 
 Rgb BdptTracer::sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
@@ -32,6 +32,7 @@ Rgb BdptTracer::sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch
             const int k = s + t - 1;
             if (k < 1 || (max_depth_ >= 0 && k > max_depth_)) continue;
             if (!set_.allows(s, t)) continue;
+            if ((s == 0 && !plan_.s0) || (s >= 1 && !plan_.connections)) continue;
             if (t >= 2 && t > n_cam) continue;
             if (s >= 2 && s > n_light) continue;
             if (t == 1 && s > n_light) continue;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "integrator/path_tracer.h"
+#include "pathspace/classify.h"
 #include "pathspace/connect.h"
 
 namespace omega {
@@ -46,10 +47,12 @@ public:
                std::vector<StrategyContribution>* per_strategy = nullptr) const;
 
     const StrategySet& strategies() const { return set_; }
+    const StrategyPlan& plan() const { return plan_; }
 
 private:
     const Scene& scene_;
     StrategySet set_;
+    StrategyPlan plan_;  // strategies that cannot contribute in this scene are never run
     int max_depth_;
     WalkLimits camera_limits_, light_limits_;
 };
