@@ -59,6 +59,10 @@ void add_render_command(CLI::App& app, RenderArgs& a) {
     cmd->add_option("--seed", a.seed, "Random seed (default 0)");
     cmd->add_option("--report", a.report_csv, "Write one CSV row per pass to this file");
     cmd->add_flag("-q,--quiet", a.quiet, "No progress output");
+    cmd->add_option("--strategies", a.strategies,
+                    "light/bdpt: also write each (s,t) strategy's weighted and unweighted image as EXR layers "
+                    "sSTt.weighted/.unweighted, for path lengths up to this")
+        ->check(CLI::Range(1, 12));
     cmd->add_option("-D,--define", a.defines, "Mitsuba XML scenes: set a <default> variable, name=value (repeatable)");
 }
 
@@ -87,6 +91,9 @@ int run_render(const RenderArgs& a) {
     rs.threads = a.threads;
     rs.seed = a.seed;
     rs.integrator = desc.integrator;
+    rs.strategy_images_max_k = a.strategies;
+    if (a.strategies > 0 && desc.integrator.type == IntegratorType::Path)
+        fmt::print(stderr, "omega: warning: --strategies needs --integrator bdpt or light; ignored\n");
 
     std::unique_ptr<RenderSession> session;
     try {
@@ -134,6 +141,7 @@ int run_render(const RenderArgs& a) {
     meta.nonfinite = last.nonfinite;
     meta.warnings = desc.warnings;
     meta.rel_error = last.error.mean_rel_error;
+    if (const StrategyImages* si = session->strategy_images()) meta.layers = si->layers(last.spp);
     try {
         write_exr(out, session->film(), meta);
     } catch (const std::exception& e) {

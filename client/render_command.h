@@ -19,6 +19,7 @@ struct RenderArgs {
     uint64_t seed = 0;
     std::string report_csv;
     bool quiet = false;
+    int strategies = 0;  // > 0: write per-(s,t) layers for path lengths up to this
     std::vector<std::string> defines;  // -D name=value, for Mitsuba XML scenes
 };
 

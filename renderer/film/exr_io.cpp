@@ -105,6 +105,17 @@ std::vector<uint8_t> encode_planes(int width, int height, const Rect& rect, cons
         fb.insert(kVar[k], Imf::Slice::Make(Imf::FLOAT, base + size_t(3 + k) * area, data, sizeof(float),
                                             sizeof(float) * w));
     }
+    std::vector<std::string> names;  // kept alive: the header and frame buffer refer to them
+    names.reserve(meta.layers.size() * 3);
+    for (const auto& layer : meta.layers) {
+        if (layer.rgb.size() != 3 * area) throw std::invalid_argument("EXR layer '" + layer.name + "' has the wrong size");
+        for (int k = 0; k < 3; ++k) {
+            names.push_back(layer.name + "." + kRgb[k]);
+            header.channels().insert(names.back(), Imf::Channel(Imf::FLOAT));
+            fb.insert(names.back(), Imf::Slice::Make(Imf::FLOAT, const_cast<float*>(layer.rgb.data()) + k, data,
+                                                     3 * sizeof(float), 3 * sizeof(float) * w));
+        }
+    }
     MemOStream os;
     {
         // The destructor writes the final line-offset table, so it must run before take().

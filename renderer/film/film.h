@@ -114,6 +114,13 @@ struct ExrMeta {
     uint64_t nonfinite = 0;
     std::vector<std::string> warnings;
     double rel_error = 0;  // omega.rel_error: estimated relative error at the end
+    // Extra RGB layers written as NAME.R, NAME.G, NAME.B (debug output such as per-strategy
+    // images); each is crop-sized, row-major, 3 floats per pixel.
+    struct Layer {
+        std::string name;
+        std::vector<float> rgb;
+    };
+    std::vector<Layer> layers;
 };
 
 // Writes R,G,B and var.R,var.G,var.B (float32). The data window is the crop, the display window

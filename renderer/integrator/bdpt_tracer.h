@@ -17,12 +17,6 @@ struct Splat {
     Rgb value;  // already multiplied by the sensor importance; times the filter weight per pixel
 };
 
-// Optional per-strategy images (pbrt's visualizestrategies): unweighted and weighted sums.
-struct StrategyImages {
-    int max_s = 0, max_t = 0;
-    bool enabled() const { return max_s > 0; }
-};
-
 // Scratch owned by one worker thread.
 struct BdptScratch {
     std::vector<PathVertex> camera, light;

@@ -36,8 +36,11 @@ int resolve_threads(int threads) {
 
 RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
     : scene_(scene), settings_(settings), tracer_(scene, tracer_settings(settings.integrator)), film_(scene.desc().sensor.film) {
-    if (settings.integrator.type != IntegratorType::Path)
+    if (settings.integrator.type != IntegratorType::Path) {
         bdpt_ = std::make_unique<BdptTracer>(scene, settings.integrator);
+        if (settings.strategy_images_max_k > 0)
+            strategies_ = std::make_unique<StrategyImages>(film_.crop(), settings.strategy_images_max_k);
+    }
 }
 
 void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0,
@@ -57,6 +60,7 @@ void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vec
     for (size_t w0 = 0; w0 < tiles.size() && !aborted(); w0 += wave) {
         const size_t w1 = std::min(tiles.size(), w0 + wave);
         std::vector<std::vector<Splat>> tile_splats(w1 - w0);
+        std::vector<std::vector<StrategyContribution>> tile_strategy_splats(strategies_ ? w1 - w0 : 0);
         arena.execute([&] {
             tbb::parallel_for(
                 tbb::blocked_range<size_t>(w0, w1, 1),
@@ -64,6 +68,7 @@ void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vec
                     TracerStats& st = stats_.local();
                     BdptScratch& scratch = scratch_.local();
                     std::vector<Splat>& local = sample_splats_.local();
+                    std::vector<StrategyContribution>* per = strategies_ ? &sample_strategies_.local() : nullptr;
                     for (size_t ti = range.begin(); ti != range.end(); ++ti) {
                         if (aborted()) return;
                         const Rect& tile = tiles[ti];
@@ -77,7 +82,8 @@ void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vec
                                     Vec2 u_lens{rng.next_1d(), rng.next_1d()};
                                     Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
                                     local.clear();
-                                    Rgb L = bdpt_->sample(ray, rng, st, scratch, local);
+                                    if (per) per->clear();
+                                    Rgb L = bdpt_->sample(ray, rng, st, scratch, local, per);
                                     ++st.samples;
                                     bool finite = is_finite(L);
                                     for (const Splat& sp : local) finite = finite && is_finite(sp.value);
@@ -87,6 +93,11 @@ void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vec
                                     }
                                     at(x, y) += Vec3d(L);
                                     out.insert(out.end(), local.begin(), local.end());
+                                    if (per)
+                                        for (const auto& c : *per) {
+                                            if (c.splat) tile_strategy_splats[ti - w0].push_back(c);
+                                            else strategies_->add_camera(x, y, c);
+                                        }
                                 }
                             }
                     }
@@ -94,6 +105,8 @@ void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vec
                 tbb::simple_partitioner());
         });
         if (aborted()) return;
+        for (const auto& list : tile_strategy_splats)
+            for (const auto& c : list) strategies_->add_splat(c, filter, inv_light_paths_per_sample);
         for (const auto& list : tile_splats)
             for (const Splat& sp : list) {
                 const int xa = std::max(crop.x0, int(std::floor(sp.film.x - r - 0.5f))),

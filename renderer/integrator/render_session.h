@@ -14,6 +14,7 @@
 #include "film/film.h"
 #include "integrator/bdpt_tracer.h"
 #include "integrator/path_tracer.h"
+#include "integrator/strategy_images.h"
 #include "scene/scene.h"
 
 namespace omega {
@@ -25,6 +26,7 @@ struct RenderSettings {
     int tile_size = 32;
     long long first_sample = 0;  // resume: sample indices below this are already in the film
     IntegratorDesc integrator;
+    int strategy_images_max_k = 0;  // > 0: record per-(s,t) images up to this path length (light, bdpt)
 };
 
 struct PassReport {
@@ -53,6 +55,8 @@ public:
     const Film& film() const { return film_; }
     Film& film() { return film_; }
     const RenderSettings& settings() const { return settings_; }
+    // Per-strategy images when settings().strategy_images_max_k > 0 (else null).
+    const StrategyImages* strategy_images() const { return strategies_.get(); }
 
     // Strategies of the light and bdpt integrators the scene cannot use; see pathspace/classify.h.
 private:
@@ -65,6 +69,8 @@ private:
     RenderSettings settings_;
     PathTracer tracer_;
     std::unique_ptr<BdptTracer> bdpt_;
+    std::unique_ptr<StrategyImages> strategies_;
+    tbb::enumerable_thread_specific<std::vector<StrategyContribution>> sample_strategies_;
     Film film_;
     tbb::enumerable_thread_specific<TracerStats> stats_;  // cache-aligned per thread
     tbb::enumerable_thread_specific<BdptScratch> scratch_;

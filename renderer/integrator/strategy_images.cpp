@@ -1,0 +1,80 @@
+#include "integrator/strategy_images.h"
+
+#include <cmath>
+#include <string>
+
+#include <fmt/format.h>
+
+namespace omega {
+
+StrategyImages::StrategyImages(const Rect& crop, int max_k) : crop_(crop), max_k_(max_k) {
+    for (int k = 1; k <= max_k; ++k)
+        for (int s = 0; s <= k; ++s) strategies_.push_back({s, k + 1 - s});  // t >= 1
+    const size_t n = size_t(crop.area());
+    weighted_.assign(strategies_.size(), std::vector<Vec3d>(n, Vec3d(0.0)));
+    unweighted_.assign(strategies_.size(), std::vector<Vec3d>(n, Vec3d(0.0)));
+}
+
+int StrategyImages::index(int s, int t) const {
+    const int k = s + t - 1;
+    if (k < 1 || k > max_k_ || t < 1) return -1;
+    // Strategies of length k start after those of lengths 1..k-1 (k + 1 each... 2, 3, ...).
+    int base = 0;
+    for (int j = 1; j < k; ++j) base += j + 1;
+    return base + s;
+}
+
+void StrategyImages::add_camera(int x, int y, const StrategyContribution& c) {
+    int i = index(c.s, c.t);
+    if (i < 0) return;
+    size_t p = size_t(y - crop_.y0) * size_t(crop_.width()) + size_t(x - crop_.x0);
+    weighted_[size_t(i)][p] += Vec3d(c.weighted);
+    unweighted_[size_t(i)][p] += Vec3d(c.unweighted);
+}
+
+void StrategyImages::add_splat(const StrategyContribution& c, const Filter& filter, double scale) {
+    int i = index(c.s, c.t);
+    if (i < 0) return;
+    const float r = filter.radius();
+    const int xa = std::max(crop_.x0, int(std::floor(c.film.x - r - 0.5f))),
+              xb = std::min(crop_.x1 - 1, int(std::ceil(c.film.x + r - 0.5f)));
+    const int ya = std::max(crop_.y0, int(std::floor(c.film.y - r - 0.5f))),
+              yb = std::min(crop_.y1 - 1, int(std::ceil(c.film.y + r - 0.5f)));
+    for (int y = ya; y <= yb; ++y)
+        for (int x = xa; x <= xb; ++x) {
+            double f = filter.pdf(double(c.film.x) - (x + 0.5), double(c.film.y) - (y + 0.5)) * scale;
+            if (f <= 0) continue;
+            size_t p = size_t(y - crop_.y0) * size_t(crop_.width()) + size_t(x - crop_.x0);
+            weighted_[size_t(i)][p] += Vec3d(c.weighted) * f;
+            unweighted_[size_t(i)][p] += Vec3d(c.unweighted) * f;
+        }
+}
+
+std::vector<ExrMeta::Layer> StrategyImages::layers(long long spp) const {
+    std::vector<ExrMeta::Layer> out;
+    const double inv = spp > 0 ? 1.0 / double(spp) : 0.0;
+    for (size_t i = 0; i < strategies_.size(); ++i) {
+        auto [s, t] = strategies_[i];
+        for (int w = 0; w < 2; ++w) {
+            const auto& src = w ? weighted_[i] : unweighted_[i];
+            ExrMeta::Layer layer;
+            layer.name = fmt::format("s{}t{}.{}", s, t, w ? "weighted" : "unweighted");
+            layer.rgb.resize(src.size() * 3);
+            for (size_t p = 0; p < src.size(); ++p)
+                for (int k = 0; k < 3; ++k) layer.rgb[3 * p + size_t(k)] = float(src[p][k] * inv);
+            out.push_back(std::move(layer));
+        }
+    }
+    return out;
+}
+
+double StrategyImages::image_mean(int s, int t, bool weighted, long long spp) const {
+    int i = index(s, t);
+    if (i < 0 || spp <= 0) return 0;
+    const auto& src = weighted ? weighted_[size_t(i)] : unweighted_[size_t(i)];
+    double sum = 0;
+    for (const Vec3d& v : src) sum += (v.x + v.y + v.z) / 3.0;
+    return sum / double(src.size()) / double(spp);
+}
+
+}  // namespace omega
