@@ -34,8 +34,15 @@ double light_origin_density(const Scene& scene, const PathVertex& v0) {
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
                             const PathVertex* sampled_sensor) {
-    const int n = s + t;
     FullPathPdfs fp;
+    full_path_pdfs_into(scene, light, camera, s, t, sampled_light, sampled_sensor, fp);
+    return fp;
+}
+
+void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& light,
+                         const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
+                         const PathVertex* sampled_sensor, FullPathPdfs& fp) {
+    const int n = s + t;
     fp.p_light.resize(size_t(n));
     fp.p_sensor.resize(size_t(n));
     fp.delta.assign(size_t(n), 0);
@@ -89,7 +96,6 @@ FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& l
     }
     // A light that cannot be hit has no density from the sensor side.
     if (!fp.light_hittable) fp.p_sensor[0] = 0;
-    return fp;
 }
 
 std::optional<Connection> connect(const Scene& scene, const std::vector<PathVertex>& light,
@@ -188,7 +194,8 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
     }
     if (is_black(c.L)) return std::nullopt;
 
-    FullPathPdfs fp = full_path_pdfs(scene, light, camera, s, t, sampled_light, sampled_sensor);
+    FullPathPdfs& fp = cstats.table;
+    full_path_pdfs_into(scene, light, camera, s, t, sampled_light, sampled_sensor, fp);
     double w = mis_weight(fp, s, set);
     if (w < 0) {
         ++cstats.bad_weights;

@@ -18,8 +18,10 @@ struct Connection {
     double importance = 0;  // t = 1: multiply by the filter weight of each pixel it reaches
 };
 
+// Per-thread counters and scratch for connect().
 struct ConnectStats {
     uint64_t bad_weights = 0;  // non-finite MIS weights: counted as errors, contribution dropped
+    FullPathPdfs table;        // reused: no allocation per connection once warmed up
 };
 
 // Strategy (s, t) for the given subpaths. Tests may ask for the full path v_0..v_k (light end
@@ -37,5 +39,8 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
                             const PathVertex* sampled_sensor);
+void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& light,
+                         const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
+                         const PathVertex* sampled_sensor, FullPathPdfs& fp);
 
 }  // namespace omega
