@@ -57,6 +57,8 @@ TEST(SceneParser, CornellBoxParses) {
 
 TEST(SceneParser, VeachMisParses) {
     SceneDesc d = parse_scene_file((source_root() / "scenes/veach-mis.yaml").string());
+    // TungstenRender.exr is direct lighting only (docs/scene-format.md, importer section).
+    EXPECT_EQ(d.integrator.max_depth, 2);
     EXPECT_EQ(d.sensor.film.width, 1280);
     EXPECT_EQ(d.sensor.film.height, 720);
     ASSERT_EQ(d.shapes.size(), 9u);
