@@ -50,7 +50,7 @@ TEST(ScaleSanity, DetectsADifferentImage) {
 
 // Every example scene renders without a single non-finite sample.
 TEST(ExampleScenes, RenderWithoutNonFiniteSamples) {
-    for (const char* name : {"cornell-box.yaml", "veach-mis.yaml"}) {
+    for (const char* name : {"cornell-box.yaml", "veach-mis.yaml", "indirect-room.yaml"}) {
         SceneDesc d = parse_scene_file(std::string(OMEGA_SOURCE_DIR "/scenes/") + name);
         d.sensor.film.width /= 16;
         d.sensor.film.height /= 16;
