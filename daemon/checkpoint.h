@@ -19,6 +19,9 @@ struct FilmSnapshot {
   std::uint64_t nonfinite = 0;
   std::optional<double> rel_error;
   std::vector<std::uint8_t> film;  // Film::serialize()
+  // In memory only (not in the checkpoint file): what tile EXRs report in their omega.* header.
+  std::string integrator;  // "path", "light" or "bdpt"; empty until known
+  std::uint64_t seed = 0;
 };
 
 // Any thread. Writes PATH.tmp, fsyncs it, renames it over PATH and fsyncs the directory.

@@ -30,7 +30,8 @@ ExrMeta meta_of(const FilmSnapshot& s) {
   ExrMeta m;
   m.spp = static_cast<long long>(s.spp);
   m.time_s = s.elapsed_s;
-  m.integrator = "path";
+  m.integrator = s.integrator.empty() ? "path" : s.integrator;
+  m.seed = s.seed;
   m.nonfinite = s.nonfinite;
   m.rel_error = s.rel_error.value_or(0);
   return m;
@@ -132,6 +133,9 @@ void RenderWorker::run() {
     bool time_done = h.time_s && resume && resume->elapsed_s >= *h.time_s;
     if (time_done) rs.halt.spp = static_cast<long long>(resume->spp);  // nothing left to render
 
+    const std::string integrator_name = desc.integrator.type == IntegratorType::Path    ? "path"
+                                        : desc.integrator.type == IntegratorType::Light ? "light"
+                                                                                        : "bdpt";
     RenderSession session(*scene, rs);
     if (resume) session.film() = Film::deserialize(desc.sensor.film, resume->film);
     {
@@ -151,6 +155,8 @@ void RenderWorker::run() {
       snap->nonfinite = base_nonfinite + r.nonfinite;
       if (std::isfinite(r.error.mean_rel_error)) snap->rel_error = r.error.mean_rel_error;
       snap->film = session.film().serialize();
+      snap->integrator = integrator_name;
+      snap->seed = spec_.seed;
       last = snap;
       last_on_disk = false;
       const bool draining = stop_requested() == StopKind::drain;

@@ -289,9 +289,21 @@ void Server::on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job) {
     std::vector<EncodedTile> tiles;
     std::string err;
     try {
-      FilmDesc fd = film ? *film : load_job_scene(jp, rec.name, rec.integrator, roots).sensor.film;
-      Film f = Film::deserialize(fd, snap->film);
-      tiles = encode_tiles(f, tile, *snap);
+      FilmSnapshot meta = *snap;
+      FilmDesc fd;
+      if (film && !meta.integrator.empty()) {
+        fd = *film;
+      } else {
+        // A checkpoint restored after a restart does not record which integrator made it.
+        SceneDesc d = load_job_scene(jp, rec.name, rec.integrator, roots);
+        fd = d.sensor.film;
+        meta.integrator = d.integrator.type == IntegratorType::Path    ? "path"
+                          : d.integrator.type == IntegratorType::Light ? "light"
+                                                                       : "bdpt";
+      }
+      meta.seed = rec.seed;
+      Film f = Film::deserialize(fd, meta.film);
+      tiles = encode_tiles(f, tile, meta);
     } catch (const std::exception& e) {
       err = e.what();
     }
