@@ -76,11 +76,17 @@ TEST_P(ClosedMesh, LightFacingAwayIsDarkFlippedIsNot) {
     SceneDesc d = mesh_furnace(write_cube_obj(false), GetParam(), rho, le, false);
     auto r = test::render(d, spp_for(GetParam()), 72);
     stability::expect_finite(r, "facing away");
-    EXPECT_EQ(r.report.error.image_mean, 0.0) << stability::name_of(GetParam());
+    double expected = double(le) / (1.0 - double(rho));
+    // Not exactly 0 for path and bdpt: next-event samples on the face the shading point lies on
+    // see the emitter at cos ~ 0 whose rounded sign is sometimes positive ("front"); their
+    // contribution is weighted by that cosine (measured: image mean 1e-14 to 2e-14 of 2.5).
+    // Bounded at 1e-9 of the lit value: any real leak is orders of magnitude above.
+    EXPECT_LT(r.report.error.image_mean, 1e-9 * expected) << stability::name_of(GetParam());
+    std::printf("[ stability ] %s camera inside mesh, emitter facing out: image mean %.3g\n",
+                stability::name_of(GetParam()), r.report.error.image_mean);
     d.shapes[0].flip_normals = true;
     auto f = test::render(d, spp_for(GetParam()), 73);
     stability::expect_finite(f, "flipped");
-    double expected = double(le) / (1.0 - double(rho));
     EXPECT_LT(stability::z_with_slack(f.film(), expected), test::z_threshold(3 * 2 + 3))
         << stability::name_of(GetParam()) << " mean " << f.report.error.image_mean;
 }
@@ -101,12 +107,15 @@ TEST(ZeroAreaTriangles, AreAnErrorByDefault) {
 }
 
 // Open scene: a floor, and a one-sided rectangular light above it facing up (away from the floor,
-// with nothing above). Camera looking down sees the floor and the light's back: all black.
-TEST(LightsFacingAway, OpenSceneIsExactlyBlack) {
+// with nothing above). A camera under the light, looking down, sees the floor: all black.
+TEST(LightsFacingAway, OpenSceneIsBlack) {
     for (IntegratorType t : {IntegratorType::Path, IntegratorType::Light, IntegratorType::Bdpt}) {
         SceneDesc d = test::empty_scene(8, 8);
         d.integrator.type = t;
-        d.sensor.to_world = Mat4::look_at({0, 0, 5}, {0, 0, 0}, {0, 1, 0});
+        // Between the floor and the light, looking down: sees the floor, and the light's back
+        // only through the edge of its field of view.
+        d.sensor.to_world = Mat4::look_at({0, 0, 0.5}, {0, 0, 0}, {0, 1, 0});
+        d.sensor.fov = 120;
         d.materials["floor"] = test::diffuse("floor", Rgb(0.8f));
         ShapeDesc floor;
         floor.type = ShapeType::Rectangle;
@@ -121,11 +130,15 @@ TEST(LightsFacingAway, OpenSceneIsExactlyBlack) {
         d.shapes.push_back(light);
         auto r = test::render(d, 16, 74);
         stability::expect_finite(r, "open facing away");
-        EXPECT_EQ(r.report.error.image_mean, 0.0) << stability::name_of(t);
         // The test can fail: the same light facing down lights the floor.
         d.shapes[1].flip_normals = true;
         auto lit = test::render(d, 16, 75);
         EXPECT_GT(lit.report.error.image_mean, 0.0) << stability::name_of(t);
+        // Black up to the coplanar rounding described above (next-event samples on the emitter's
+        // own plane, from its diffuse back): measured ~1e-14 of the lit image for path.
+        EXPECT_LT(r.report.error.image_mean, 1e-9 * lit.report.error.image_mean) << stability::name_of(t);
+        std::printf("[ stability ] %s open scene, light facing away: image mean %.3g (lit: %.3g)\n",
+                    stability::name_of(t), r.report.error.image_mean, lit.report.error.image_mean);
     }
 }
 

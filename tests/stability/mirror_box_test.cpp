@@ -32,16 +32,20 @@ SceneDesc mirror_box(float reflectance, int max_depth, IntegratorType type, int 
     return d;
 }
 
+// The path tracer's estimate is exact (integers in float); BDPT splits the directly seen emitter
+// (k = 1) between s = 0 and light tracing (s = 1, t = 1), whose splats land anywhere: the
+// image mean is then tested against 1000 by its noise.
 TEST(MirrorBox, ThousandBouncesExactly) {
     for (IntegratorType t : {IntegratorType::Path, IntegratorType::Bdpt}) {
-        auto r = test::render(mirror_box(1.f, 1000, t, t == IntegratorType::Path ? 8 : 4), 2, 81);
+        auto r = test::render(mirror_box(1.f, 1000, t, t == IntegratorType::Path ? 8 : 4), t == IntegratorType::Path ? 2 : 16, 81);
         stability::expect_finite(r, "mirror box 1000");
         Rect c = r.film().crop();
         int wrong = 0;
         for (int y = c.y0; y < c.y1; ++y)
             for (int x = c.x0; x < c.x1; ++x)
                 if (stability::channel_mean(r.film().pixel(x, y)) != 1000.0) ++wrong;
-        EXPECT_EQ(wrong, 0) << stability::name_of(t) << " mean " << r.report.error.image_mean;
+        if (t == IntegratorType::Path) EXPECT_EQ(wrong, 0) << "mean " << r.report.error.image_mean;
+        else EXPECT_LT(stability::z_with_slack(r.film(), 1000.0), test::z_threshold(2)) << "bdpt mean " << r.report.error.image_mean;
         std::printf("[ stability ] %s mirror box, R=1, max_depth 1000: mean %.9g (expected 1000), %.3g rays, %.2f s\n",
                     stability::name_of(t), r.report.error.image_mean, double(r.report.rays), r.report.elapsed_s);
     }
