@@ -49,6 +49,26 @@ inline void expect_finite(const test::RenderResult& r, const std::string& what) 
     EXPECT_EQ(bad, 0) << what << ": non-finite pixels";
 }
 
+// Per-pixel z-scores divide by a variance estimated from the pixel's own n samples (or batch
+// means): they follow Student's t with n - 1 degrees of freedom, whose tails are heavier than the
+// normal's. Bonferroni bound for n_tests such scores: the normal quantile corrected by the
+// Cornish-Fisher expansion of the t quantile (Abramowitz & Stegun 26.7.5).
+inline double t_threshold(int n_tests, double dof, double alpha = 1e-3) {
+    double z = test::z_threshold(n_tests, alpha);
+    if (!(dof > 0)) return INFINITY;
+    double z3 = z * z * z, z5 = z3 * z * z;
+    return z + (z3 + z) / (4 * dof) + (5 * z5 + 16 * z3 + 3 * z) / (96 * dof * dof);
+}
+
+// Smallest per-pixel sample (or batch) count over the crop, minus one.
+inline double min_dof(const Film& film) {
+    Rect c = film.crop();
+    uint64_t n = UINT64_MAX;
+    for (int y = c.y0; y < c.y1; ++y)
+        for (int x = c.x0; x < c.x1; ++x) n = std::min(n, film.pixel(x, y).n);
+    return double(n) - 1.0;
+}
+
 inline const char* name_of(IntegratorType t) {
     switch (t) {
         case IntegratorType::Path: return "path";

@@ -73,11 +73,14 @@ TEST_P(TinyLight, ImageDoesNotDependOnRadius) {
         const double c_used = double(float(s.c / (r * r))) * r * r;
         TinySetup se = s;
         se.c = c_used;
-        auto res = test::render(tiny_light_scene(s, r, type), type == IntegratorType::Path ? 32 : 16, 31);
+        // BDPT's per-pixel variance comes from ~20 batch means (splatting integrators): enough
+        // samples per batch that a batch is not dominated by the rare hits of the tiny light.
+        auto res = test::render(tiny_light_scene(s, r, type), type == IntegratorType::Path ? 32 : 256, 31);
         stability::expect_finite(res, "tiny light");
         auto z = test::z_against(res.film(), [&](int x, int y) { return expected_pixel(se, x, y); });
         EXPECT_LT(std::abs(z.z), test::z_threshold(kTests)) << stability::name_of(type) << " r " << r;
-        EXPECT_LT(z.max_abs_z, test::z_threshold(kTests * s.res * s.res)) << stability::name_of(type) << " r " << r;
+        EXPECT_LT(z.max_abs_z, stability::t_threshold(kTests * s.res * s.res, stability::min_dof(res.film())))
+            << stability::name_of(type) << " r " << r;
         std::printf("[ stability ] tiny light %s r=%g: image z %.2f, worst pixel z %.2f, mean %.6g, %.2f s\n",
                     stability::name_of(type), r, z.z, z.max_abs_z, res.report.error.image_mean, res.report.elapsed_s);
     }
