@@ -103,9 +103,13 @@ INSTANTIATE_TEST_SUITE_P(Integrators, ScaleOffset, ::testing::Values(IntegratorT
 // BDPT 1e5 from the origin (unit-sized scene, float spacing 2^-7 there) still reads brighter than
 // the closed form: image mean +2.1% at 256 spp (z 8.7); +0.6% at offset 3e4, within noise at 1e4
 // and below; the path tracer is unbiased at every offset. A 30% loss from the orthographic
-// sensor density was fixed (subpath.cpp sensor_density_at); the rest is not found yet.
+// sensor density was fixed (subpath.cpp sensor_density_at); the rest is not found yet. Narrowed
+// down: the light integrator alone (max_depth 2, 256 spp) reads +20% at offset 1e5 (z 23) and is
+// exact at the origin, so the culprit is the t = 1 connection to the orthographic sensor
+// (Sensor::sample_wi / its importance / the splat), which BDPT weighs in by MIS.
 TEST(ScaleOffsetKnownBug, BdptFarFromOrigin) {
-    GTEST_SKIP() << "known bug: BDPT biased +2% at offset 1e5 (MIS densities from rounded vertex positions?)";
+    GTEST_SKIP() << "known bug: light tracing into an orthographic sensor biased +20% at offset 1e5 "
+                    "(BDPT +2% through MIS); see the comment above";
     FfSetup st;
     auto r = test::render(scene(st, 1.0, {1e5, -1e5, 1e5}, IntegratorType::Bdpt), 256, 43);
     auto z = test::z_against(r.film(), [&](int x, int y) { return expected_pixel(st, x, y); });
