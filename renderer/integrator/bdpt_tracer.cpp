@@ -2,14 +2,9 @@
 
 namespace omega {
 
-namespace {
-// Unbounded depth still needs a hard stop for scenes that never absorb (a closed perfect mirror box).
-constexpr int kMaxUnboundedVertices = 1 << 16;
-}  // namespace
-
 BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
     : scene_(scene), set_{desc.type}, plan_(plan_strategies(scene)), max_depth_(desc.max_depth) {
-    const int md = desc.max_depth < 0 ? kMaxUnboundedVertices : desc.max_depth;
+    const int md = desc.max_depth < 0 ? kMaxUnboundedDepth : desc.max_depth;
     // k = s + t - 1 <= max_depth: t <= max_depth + 1 (s = 0), s <= max_depth (t = 1).
     camera_limits_ = {desc.type == IntegratorType::Light ? 0 : md + 1, desc.rr_depth + 1};
     light_limits_ = {desc.type == IntegratorType::Path || !plan_.light_subpaths ? 0 : md, desc.rr_depth};

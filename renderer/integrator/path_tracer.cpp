@@ -39,7 +39,8 @@ Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const
 }
 
 Rgb PathTracer::radiance(Ray ray, Rng& rng, TracerStats& stats) const {
-    const int max_depth = settings_.max_depth;
+    const int max_depth = settings_.max_depth >= 0 ? settings_.max_depth : kMaxUnboundedDepth;
+    const bool nee = settings_.light_sampling;
     Rgb L(0.f), beta(1.f);
     bool prev_delta = true;     // the camera vertex has no BSDF density to weigh against
     float prev_pdf_sa = 0;      // solid-angle density of the direction that made the current edge
@@ -55,7 +56,7 @@ Rgb PathTracer::radiance(Ray ray, Rng& rng, TracerStats& stats) const {
             int env = scene_.environment_light();
             if (env >= 0) {
                 Rgb le = std::get<ConstantLight>(scene_.lights()[size_t(env)]).radiance;
-                float w = prev_delta ? 1.f : power_heuristic(prev_pdf_sa, sel.pmf(size_t(env)) * environment_pdf_li_sa());
+                float w = prev_delta || !nee ? 1.f : power_heuristic(prev_pdf_sa, sel.pmf(size_t(env)) * environment_pdf_li_sa());
                 L += beta * le * w;
             }
             break;
@@ -67,14 +68,14 @@ Rgb PathTracer::radiance(Ray ray, Rng& rng, TracerStats& stats) const {
             Rgb le = area_light_le(al, hit, wo);
             if (!is_black(le)) {
                 float w = 1.f;
-                if (!prev_delta) {
+                if (!prev_delta && nee) {
                     float pdf_light_sa = sel.pmf(size_t(shape.light)) * light_pdf_li_sa(scene_, al, prev_p, hit);
                     w = power_heuristic(prev_pdf_sa, pdf_light_sa);
                 }
                 L += beta * le * w;
             }
         }
-        if (max_depth >= 0 && k >= max_depth) break;  // the next edge would exceed max_depth
+        if (k >= max_depth) break;  // the next edge would exceed max_depth
 
         const Bsdf& bsdf = scene_.bsdf_of(hit);
         if (std::holds_alternative<BlackBsdf>(bsdf)) break;
@@ -82,7 +83,7 @@ Rgb PathTracer::radiance(Ray ray, Rng& rng, TracerStats& stats) const {
         Vec3 wo_local = shading.to_local(wo);
         if (wo_local.z == 0) break;
 
-        if (bsdf_has_nondelta(bsdf)) L += beta * sample_direct(hit, shading, wo_local, bsdf, rng, stats);
+        if (nee && bsdf_has_nondelta(bsdf)) L += beta * sample_direct(hit, shading, wo_local, bsdf, rng, stats);
 
         float uc = rng.next_1d();
         Vec2 u{rng.next_1d(), rng.next_1d()};

@@ -10,9 +10,14 @@
 
 namespace omega {
 
+// Unbounded depth still needs a hard stop for scenes that never absorb (a closed perfect mirror
+// box): paths end after this many edges (the BDPT engine's subpaths after as many vertices).
+constexpr int kMaxUnboundedDepth = 1 << 16;
+
 struct PathTracerSettings {
-    int max_depth = -1;  // -1: unbounded, Russian roulette ends paths
+    int max_depth = -1;  // -1: unbounded, Russian roulette ends paths (at most kMaxUnboundedDepth edges)
     int rr_depth = 5;    // first edge count at which Russian roulette may stop a path
+    bool light_sampling = true;  // false: BSDF sampling only (IntegratorDesc::light_sampling)
 };
 
 // Per-thread counters; each worker owns one (cache-line aligned by its container).

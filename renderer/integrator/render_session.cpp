@@ -25,7 +25,7 @@ constexpr double kPassSeconds = 1.0;
 constexpr long long kMinBatches = 16;
 constexpr long long kMinSppForErrorHalt = 16;  // variance estimates below this are too noisy to stop on
 
-PathTracerSettings tracer_settings(const IntegratorDesc& d) { return {d.max_depth, d.rr_depth}; }
+PathTracerSettings tracer_settings(const IntegratorDesc& d) { return {d.max_depth, d.rr_depth, d.light_sampling}; }
 
 }  // namespace
 
@@ -36,6 +36,8 @@ int resolve_threads(int threads) {
 
 RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
     : scene_(scene), settings_(settings), tracer_(scene, tracer_settings(settings.integrator)), film_(scene.desc().sensor.film) {
+    if (!settings.integrator.light_sampling && settings.integrator.type != IntegratorType::Path)
+        throw std::invalid_argument("light_sampling = false is only available with the path integrator");
     if (settings.integrator.type != IntegratorType::Path) {
         bdpt_ = std::make_unique<BdptTracer>(scene, settings.integrator);
         if (settings.strategy_images_max_k > 0)

@@ -64,6 +64,7 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
     const PathVertex& v0 = V(0);
     const Light& light0 = scene.lights()[size_t(v0.light)];
     fp.light_hittable = !light_is_delta(light0);
+    fp.light_at_infinity = v0.infinite;
     fp.p_light[0] = light_origin_density(scene, v0);
 
     // Densities across the connecting edge v_{s-1} -- v_s and one step beyond, which neither

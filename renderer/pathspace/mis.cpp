@@ -9,6 +9,9 @@ bool strategy_possible(const FullPathPdfs& path, int s) {
     const int t = k + 1 - s;
     if (s < 0 || t < 1) return false;
     if (s == 0) return path.light_hittable;
+    // Light tracing never joins a vertex at infinity to the sensor (connect() refuses it), so the
+    // path k = 1 from the environment straight into the lens has no s = 1 strategy.
+    if (s == 1 && t == 1 && path.light_at_infinity) return false;
     // The connecting edge v_{s-1} -- v_s: neither end may be a delta scattering event.
     return !path.delta[size_t(s - 1)] && !path.delta[size_t(s)];
 }

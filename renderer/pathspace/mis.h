@@ -20,6 +20,7 @@ struct FullPathPdfs {
     std::vector<double> p_light, p_sensor;
     std::vector<uint8_t> delta;  // v_i is S: no strategy can connect an edge at it
     bool light_hittable = true;  // s = 0: the light can be hit by a sensor subpath (not delta in position or direction)
+    bool light_at_infinity = false;  // v_0 is at infinity: s = 1, t = 1 cannot connect it to the sensor
     int k() const { return int(p_light.size()) - 1; }
 };
 

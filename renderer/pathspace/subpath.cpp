@@ -112,10 +112,17 @@ Vec3 direction(const PathVertex& a, const PathVertex& b) {
 
 double sensor_density_at(const Scene& scene, const PathVertex& cam, const PathVertex& next) {
     const Sensor& sensor = scene.sensor();
+    if (sensor.delta_direction()) {
+        // Orthographic: the direction is the sensor's axis, the position density projects onto
+        // the surface. Use the axis itself, not the difference of the rounded vertex positions:
+        // far from the origin (1e5) that difference is off by a few 1e-3 rad, pdf_we's direction
+        // test rejected it, and the zero density broke the MIS weights (BDPT lost 30%).
+        Vec3 axis = Vec3(normalize(sensor.to_world.fwd.vector(Vec3d(0, 0, 1))));
+        Sensor::Pdf pdf = sensor.pdf_we(cam.p(), axis);
+        return pdf.pos * (next.is_on_surface() ? absdot(axis, next.hit.ng) : 1.f);
+    }
     Vec3 w = direction(cam, next);
     Sensor::Pdf pdf = sensor.pdf_we(cam.p(), w);
-    // Orthographic: the direction is fixed, the position density projects onto the surface.
-    if (sensor.delta_direction()) return pdf.pos * (next.is_on_surface() ? absdot(w, next.hit.ng) : 1.f);
     return to_area_density(cam, pdf.dir, next);
 }
 

@@ -26,6 +26,11 @@ struct IntegratorDesc {
     IntegratorType type = IntegratorType::Path;
     int max_depth = -1;  // edges; -1 = unbounded (Russian roulette ends paths)
     int rr_depth = 5;    // edges after which Russian roulette starts
+    // Tests only (no scene-file key): false makes the path integrator sample BSDFs alone, without
+    // next-event estimation, so emitters hit count with MIS weight 1 (strategy s = 0 alone). Its
+    // per-sample variance then has closed forms (tests/stability/furnace_variance_test.cpp).
+    // Other integrators reject false.
+    bool light_sampling = true;
 };
 
 enum class FilterType { Box, Tent, Gaussian };

@@ -1,0 +1,129 @@
+// The same scene at scale 1e-4, 1, 1e4 and 1e6, and 1e5 away from the origin, renders the same
+// image: z-tested per pixel against the closed form of a diffuse plane under a parallel
+// rectangular light (rho Le F(x), F the point-to-rectangle form factor), which no scaling or
+// translation changes. Self-intersection or leaks at extreme scales would bias whole regions.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "stability_util.h"
+
+namespace omega {
+namespace {
+
+double corner_ff(double a, double b, double h) {
+    double A = a / h, B = b / h;
+    double sa = std::sqrt(1 + A * A), sb = std::sqrt(1 + B * B);
+    return (A / sa * std::atan(B / sa) + B / sb * std::atan(A / sb)) / (2 * kPiD);
+}
+
+double rect_ff(double px, double py, double x0, double x1, double y0, double y1, double h) {
+    x0 -= px; x1 -= px; y0 -= py; y1 -= py;
+    return corner_ff(x1, y1, h) - corner_ff(x0, y1, h) - corner_ff(x1, y0, h) + corner_ff(x0, y0, h);
+}
+
+struct FfSetup {
+    double lx0 = 0.5, lx1 = 1.5, ly0 = -0.5, ly1 = 0.5, h = 1.0;  // the light, facing down
+    double cx = -0.25, cy = 0.0, half = 1.0;                      // viewed square (the light's edge crosses it)
+    float rho = 0.8f, le = 4.f;
+    int res = 16;
+};
+
+// Everything (camera included) mapped by translate(offset) * scale(s).
+SceneDesc scene(const FfSetup& st, double s, const Vec3d& offset, IntegratorType type) {
+    Mat4 T = Mat4::translate(offset) * Mat4::scale({s, s, s});
+    SceneDesc d = test::empty_scene(st.res, st.res);
+    d.integrator.type = type;
+    d.integrator.max_depth = -1;
+    d.sensor.type = SensorType::Orthographic;
+    d.sensor.to_world = T * Mat4::look_at({st.cx, st.cy, 0.4}, {st.cx, st.cy, 0}, {0, 1, 0}) *
+                        Mat4::scale({st.half, st.half, 1});
+    d.materials["floor"] = test::diffuse("floor", Rgb(st.rho));
+    d.materials["black"] = MaterialDesc{"black", BlackBsdf{}, {}};
+    ShapeDesc floor;
+    floor.type = ShapeType::Rectangle;
+    floor.to_world = T * Mat4::scale({10, 10, 1});
+    floor.material = "floor";
+    d.shapes.push_back(floor);
+    ShapeDesc light;
+    light.type = ShapeType::Rectangle;
+    light.to_world = T * Mat4::translate({0.5 * (st.lx0 + st.lx1), 0.5 * (st.ly0 + st.ly1), st.h}) *
+                     Mat4::scale({0.5 * (st.lx1 - st.lx0), 0.5 * (st.ly1 - st.ly0), 1}) * Mat4::rotate({1, 0, 0}, 180);
+    light.material = "black";
+    light.emitter = EmitterDesc{Rgb(st.le), false};
+    d.shapes.push_back(light);
+    return d;
+}
+
+double expected_pixel(const FfSetup& s, int x, int y) {
+    static const double g[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
+    static const double w[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
+    double sum = 0;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+            double fx = x + 0.5 + 0.5 * g[i], fy = y + 0.5 + 0.5 * g[j];
+            double wx = s.cx + (2 * fx / s.res - 1) * s.half;
+            double wy = s.cy + (1 - 2 * fy / s.res) * s.half;
+            sum += w[i] * w[j] * 0.25 * s.rho * s.le * rect_ff(wx, wy, s.lx0, s.lx1, s.ly0, s.ly1, s.h);
+        }
+    return sum;
+}
+
+struct Placement {
+    double scale;
+    Vec3d offset;
+    const char* label;
+};
+const Placement kPlacements[] = {{1e-4, {0, 0, 0}, "scale 1e-4"}, {1.0, {0, 0, 0}, "scale 1"},
+                                 {1e4, {0, 0, 0}, "scale 1e4"},   {1e6, {0, 0, 0}, "scale 1e6"},
+                                 {1.0, {1e5, -1e5, 1e5}, "offset 1e5"}};
+constexpr int kTests = 5 * 2;
+
+class ScaleOffset : public ::testing::TestWithParam<IntegratorType> {};
+
+TEST_P(ScaleOffset, SameImageAsClosedForm) {
+    FfSetup st;
+    for (const Placement& p : kPlacements) {
+        // See ScaleOffsetKnownBug below.
+        if (GetParam() == IntegratorType::Bdpt && p.offset.x != 0) continue;
+        auto r = test::render(scene(st, p.scale, p.offset, GetParam()), 32, 41);
+        stability::expect_finite(r, p.label);
+        auto z = test::z_against(r.film(), [&](int x, int y) { return expected_pixel(st, x, y); });
+        EXPECT_LT(std::abs(z.z), test::z_threshold(kTests)) << p.label;
+        EXPECT_LT(z.max_abs_z, stability::t_threshold(kTests * st.res * st.res, stability::min_dof(r.film()))) << p.label;
+        std::printf("[ stability ] %s %s: image z %.2f, worst pixel z %.2f, mean %.6g, %.2f s\n",
+                    stability::name_of(GetParam()), p.label, z.z, z.max_abs_z, r.report.error.image_mean,
+                    r.report.elapsed_s);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, ScaleOffset, ::testing::Values(IntegratorType::Path, IntegratorType::Bdpt),
+                         [](const auto& info) { return std::string(stability::name_of(info.param)); });
+
+// BDPT 1e5 from the origin (unit-sized scene, float spacing 2^-7 there) still reads brighter than
+// the closed form: image mean +2.1% at 256 spp (z 8.7); +0.6% at offset 3e4, within noise at 1e4
+// and below; the path tracer is unbiased at every offset. A 30% loss from the orthographic
+// sensor density was fixed (subpath.cpp sensor_density_at); the rest is not found yet. Narrowed
+// down: the light integrator alone (max_depth 2, 256 spp) reads +20% at offset 1e5 (z 23) and is
+// exact at the origin, so the culprit is the t = 1 connection to the orthographic sensor
+// (Sensor::sample_wi / its importance / the splat), which BDPT weighs in by MIS.
+TEST(ScaleOffsetKnownBug, BdptFarFromOrigin) {
+    GTEST_SKIP() << "known bug: light tracing into an orthographic sensor biased +20% at offset 1e5 "
+                    "(BDPT +2% through MIS); see the comment above";
+    FfSetup st;
+    auto r = test::render(scene(st, 1.0, {1e5, -1e5, 1e5}, IntegratorType::Bdpt), 256, 43);
+    auto z = test::z_against(r.film(), [&](int x, int y) { return expected_pixel(st, x, y); });
+    EXPECT_LT(std::abs(z.z), test::z_threshold(1));
+}
+
+// The test can fail: the light raised by 10% of its height is caught, at the largest scale too.
+TEST(ScaleOffsetSanity, DetectsAMovedLight) {
+    FfSetup st, moved;
+    moved.h = 1.1;
+    auto r = test::render(scene(moved, 1e6, {0, 0, 0}, IntegratorType::Path), 32, 42);
+    auto z = test::z_against(r.film(), [&](int x, int y) { return expected_pixel(st, x, y); });
+    EXPECT_GT(std::abs(z.z), test::z_threshold(1));
+}
+
+}  // namespace
+}  // namespace omega
