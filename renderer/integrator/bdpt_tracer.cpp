@@ -7,7 +7,8 @@ BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
     const int md = desc.max_depth < 0 ? kMaxUnboundedDepth : desc.max_depth;
     // k = s + t - 1 <= max_depth: t <= max_depth + 1 (s = 0), s <= max_depth (t = 1).
     camera_limits_ = {desc.type == IntegratorType::Light ? 0 : md + 1, desc.rr_depth + 1};
-    light_limits_ = {desc.type == IntegratorType::Path || !plan_.light_subpaths ? 0 : md, desc.rr_depth};
+    // Without a D surface the light subpath is only needed for its endpoint (s = 1, t = 1).
+    light_limits_ = {desc.type == IntegratorType::Path ? 0 : (plan_.light_subpaths ? md : 1), desc.rr_depth};
 }
 
 Rgb BdptTracer::sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
@@ -27,7 +28,9 @@ Rgb BdptTracer::sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch
             const int k = s + t - 1;
             if (k < 1 || (max_depth_ >= 0 && k > max_depth_)) continue;
             if (!set_.allows(s, t)) continue;
-            if ((s == 0 && !plan_.s0) || (s >= 1 && !plan_.connections)) continue;
+            // Skip only what has zero probability (the MIS routine must agree): without a D
+            // surface no edge can be connected, except a light endpoint joined to the sensor.
+            if ((s == 0 && !plan_.s0) || (s >= 1 && !plan_.connections && !(s == 1 && t == 1))) continue;
             if (t >= 2 && t > n_cam) continue;
             if (s >= 2 && s > n_light) continue;
             if (t == 1 && s > n_light) continue;

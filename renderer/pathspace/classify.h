@@ -55,8 +55,9 @@ std::vector<std::string> path_space_warnings(const Scene& scene, IntegratorType 
 // Which strategies can contribute in this scene at all; the rest are never evaluated.
 struct StrategyPlan {
     bool s0 = true;             // camera subpaths hitting lights
-    bool connections = true;    // any strategy with s >= 1 (needs a D surface)
-    bool light_subpaths = true; // strategies with s >= 2 or t = 1 (needs a D surface)
+    bool connections = true;    // strategies with s >= 1 that end an edge at a surface (need a D surface);
+                                // (s, t) = (1, 1), a light endpoint joined to the sensor, always stays
+    bool light_subpaths = true; // walks beyond the light endpoint (s >= 2 or t = 1 need a D surface)
 };
 StrategyPlan plan_strategies(const Scene& scene);
 
