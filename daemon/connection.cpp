@@ -49,6 +49,11 @@ Connection::ReadStatus Connection::read_frames(std::vector<protocol::DecodedFram
     break;
   }
   while (auto f = decoder_.next()) out.push_back(std::move(*f));
+  if (decoder_.at_frame_boundary() && inbuf_.empty()) {
+    partial_since_.reset();
+  } else if (total > 0 || !partial_since_) {
+    partial_since_ = std::chrono::steady_clock::now();  // inside a frame, and bytes came
+  }
   return status;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // One client connection: a non-blocking socket, an incremental frame decoder with limits, and a
 // bounded, coalescing output queue. Owned by the Server; loop thread only.
+#include <chrono>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -40,6 +41,10 @@ class Connection {
   // and framing_error() is set.
   ReadStatus read_frames(std::vector<protocol::DecodedFrame>& out);
   const std::optional<protocol::Failure<protocol::FrameError>>& framing_error() const { return decoder_.error(); }
+  // Inside a frame: when its bytes last arrived; nullopt between frames. A client that sends
+  // half a frame and stalls is cut by Server::sweep_timeouts (frame_timeout_s).
+  std::optional<std::chrono::steady_clock::time_point> partial_since() const { return partial_since_; }
+  std::chrono::steady_clock::time_point opened_at() const { return opened_at_; }
 
   void send(const protocol::Frame& f);  // never dropped; counts against the limit
   void send_coalesced(const CoalesceKey& key, const std::string& header,
@@ -52,7 +57,10 @@ class Connection {
 
   // Session state.
   bool welcomed = false;
-  std::string user;     // job owner: the uid in decimal on unix sockets, "tcp" otherwise
+  bool authenticated = false;  // welcomed and, on TCP with tcp_users, the HMAC answer checked
+  std::string nonce;    // the challenge sent in welcome (TCP with auth)
+  std::string user;     // job owner: the uid in decimal on unix sockets, the TCP user name after
+                        // HMAC auth, "tcp" on loopback TCP without auth
   bool closing = false; // close once the output is written (after bye or a fatal error)
   bool dead = false;    // close now
   std::map<std::uint64_t, PendingSubmit> pending;  // by submit id
@@ -65,6 +73,8 @@ class Connection {
   Peer peer_;
   protocol::FrameDecoder decoder_;
   std::string inbuf_;  // bytes read but not yet taken by the decoder
+  std::chrono::steady_clock::time_point opened_at_ = std::chrono::steady_clock::now();
+  std::optional<std::chrono::steady_clock::time_point> partial_since_;
   OutputQueue out_;
   std::size_t out_limit_;
 };

@@ -4,6 +4,7 @@
 #include <sys/epoll.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <csignal>
 #include <filesystem>
 
@@ -51,6 +52,7 @@ void Server::start() {
     log_.info("systemd watchdog: pinging every {:.1f} s", wd);
     loop_.add_timer(wd, [this, wd] { watchdog_tick(wd); });
   }
+  loop_.add_timer(1.0, [this] { sweep_timeouts(); });
   std::string where;
   for (const auto& l : listeners_) where += (where.empty() ? "" : ", ") + l.text();
   log_.info("omegad ready: listening on {}; state in {}; {} render threads, {} job(s) at once", where,
@@ -75,6 +77,15 @@ void Server::open_listeners() {
       if (la.kind == ListenAddress::Kind::unix_socket) fs::create_directories(fs::path(la.path).parent_path());
       listeners_.emplace_back(la);
     }
+  }
+  for (const auto& l : listeners_) {
+    if (l.unix_socket()) continue;
+    if (!l.loopback() && cfg_.tcp_users.empty())
+      throw std::runtime_error("refusing to listen on " + l.text() +
+                               ": it is not a loopback address and TCP authentication is not configured "
+                               "(add tcp_users to the config, see docs/security.md)");
+    if (cfg_.tcp_users.empty())
+      log_.warn("{}: TCP without authentication (no tcp_users): every local user acts as 'tcp'", l.text());
   }
   for (std::size_t i = 0; i < listeners_.size(); ++i)
     loop_.add(listeners_[i].fd(), EPOLLIN, [this, i](std::uint32_t) { on_accept(i); });
@@ -283,6 +294,34 @@ void Server::maybe_finish_shutdown() {
   log_.info("drained; exiting");
   phase_ = Phase::stopped;
   loop_.stop();
+}
+
+void Server::sweep_timeouts() {
+  const auto now = std::chrono::steady_clock::now();
+  auto secs = [&](std::chrono::steady_clock::time_point t) { return std::chrono::duration<double>(now - t).count(); };
+  std::vector<std::uint64_t> cut;
+  for (auto& [id, c] : conns_) {
+    if (c->dead) continue;
+    if (auto since = c->partial_since(); since && cfg_.frame_timeout_s > 0 && secs(*since) > cfg_.frame_timeout_s) {
+      log_.warn("connection {} ({}): no byte for {:.0f} s inside a frame (frame_timeout_s); closing", id,
+                c->peer().name, secs(*since));
+      reply_error(*c, 0, protocol::ErrorCode::bad_frame, "timeout: the frame was not completed in time");
+      cut.push_back(id);
+    } else if (!c->authenticated && !c->closing && secs(c->opened_at()) > cfg_.handshake_timeout_s) {
+      log_.warn("connection {} ({}): handshake not completed within {} s (handshake_timeout_s); closing", id,
+                c->peer().name, cfg_.handshake_timeout_s);
+      reply_error(*c, 0, protocol::ErrorCode::auth_required, "timeout: hello/auth not completed in time");
+      cut.push_back(id);
+    }
+  }
+  for (auto id : cut) {
+    Connection* c = find(id);
+    c->flush();  // best effort: the error frame, without waiting for a peer that may not read
+    c->dead = true;
+    dirty_.insert(id);
+  }
+  flush_dirty();
+  loop_.add_timer(1.0, [this] { sweep_timeouts(); });
 }
 
 void Server::watchdog_tick(double interval) {
