@@ -61,6 +61,14 @@ void Server::start() {
   reschedule();
 }
 
+namespace {
+std::string refuse_open_tcp(const std::string& where) {
+  return "refusing to listen on " + where +
+         ": it is not a loopback address and TCP authentication is not configured (add tcp_users to the config, "
+         "see docs/security.md)";
+}
+}  // namespace
+
 void Server::open_listeners() {
   std::vector<int> fds = activated_sockets();
   for (int fd : fds) listeners_.push_back(Listener::adopt(fd));
@@ -74,6 +82,8 @@ void Server::open_listeners() {
       } catch (const std::invalid_argument& e) {
         throw std::runtime_error(e.what());
       }
+      if (la.kind == ListenAddress::Kind::tcp && !la.loopback && cfg_.tcp_users.empty())
+        throw std::runtime_error(refuse_open_tcp(la.text()));  // before binding it at all
       if (la.kind == ListenAddress::Kind::unix_socket) fs::create_directories(fs::path(la.path).parent_path());
       listeners_.emplace_back(la);
     }
@@ -81,9 +91,7 @@ void Server::open_listeners() {
   for (const auto& l : listeners_) {
     if (l.unix_socket()) continue;
     if (!l.loopback() && cfg_.tcp_users.empty())
-      throw std::runtime_error("refusing to listen on " + l.text() +
-                               ": it is not a loopback address and TCP authentication is not configured "
-                               "(add tcp_users to the config, see docs/security.md)");
+      throw std::runtime_error(refuse_open_tcp(l.text()));
     if (cfg_.tcp_users.empty())
       log_.warn("{}: TCP without authentication (no tcp_users): every local user acts as 'tcp'", l.text());
   }
