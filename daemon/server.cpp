@@ -47,6 +47,9 @@ void Server::start() {
   recover_jobs();
   open_listeners();
 
+  loop_.set_error_handler([this](const std::exception& e) {
+    log_.error("loop: {}; carrying on (the request or event that hit it was not completed)", e.what());
+  });
   loop_.add(signals_.fd(), EPOLLIN, [this](std::uint32_t) { on_signal(); });
   if (double wd = watchdog_interval_s(); wd > 0) {
     log_.info("systemd watchdog: pinging every {:.1f} s", wd);

@@ -107,7 +107,11 @@ void Server::on_validated(std::uint64_t conn, const protocol::Submit& s, Validat
   } catch (const std::exception& e) {
     fs::remove_all(v.staging, ec);
     log_.error("submit '{}': cannot store the job: {}", s.name, e.what());
-    return reply_error(*c, s.id, ErrorCode::internal, std::string("cannot store the job: ") + e.what());
+    const std::string what = e.what();
+    const bool transient = what.find("locked") != std::string::npos || what.find("busy") != std::string::npos ||
+                           what.find("disk") != std::string::npos || what.find("No space") != std::string::npos;
+    return reply_error(*c, s.id, transient ? ErrorCode::busy : ErrorCode::internal,
+                       "cannot store the job: " + what);
   }
   log_.info("job {} accepted from {} (user {}): '{}', priority {}, seed {}", job, c->peer().name, c->user, s.name,
             s.priority, s.seed);
