@@ -86,6 +86,7 @@ Config load_config(const std::string& path) {
   r.scalar("max_connections", c.max_connections);
   r.scalar("max_pending_submits", c.max_pending_submits);
   r.scalar("max_queued_jobs", c.max_queued_jobs);
+  r.scalar("max_asset_cache_bytes", c.max_asset_cache_bytes);
   r.scalar("max_jobs_per_owner", c.max_jobs_per_owner);
   r.scalar("max_resolution", c.max_resolution);
   r.scalar("max_spp", c.max_spp);

@@ -28,6 +28,7 @@ struct Config {
   int max_connections = 1024;
   int max_pending_submits = 4;  // per connection
   int max_queued_jobs = 10000;
+  std::uint64_t max_asset_cache_bytes = 16ull << 30;  // LRU eviction of assets no job needs
   int max_jobs_per_owner = 1000;       // unfinished jobs of one owner (`busy` beyond)
   int max_resolution = 16384;          // film width and height, each
   std::uint64_t max_spp = 1ull << 24;  // a job's spp halt (and the default when it has none)

@@ -82,6 +82,7 @@ class Server : public FrameSink {
   void on_auth(Connection& c, const protocol::DecodedFrame& f);
   void on_submit(Connection& c, protocol::Submit s);
   void on_asset(Connection& c, protocol::Asset a);
+  void enforce_asset_cache_limit();
   void on_job_request(Connection& c, protocol::MessageType t, std::uint64_t id, std::uint64_t job,
                       std::optional<std::int64_t> priority);
   void on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job);

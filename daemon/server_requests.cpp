@@ -257,7 +257,18 @@ void Server::on_asset(Connection& c, protocol::Asset a) {
     return reply_error(c, a.id, ErrorCode::asset_mismatch, problem);
   }
   p.missing.erase(a.sha256);
+  enforce_asset_cache_limit();
   if (p.missing.empty()) validate(c, a.id);
+}
+
+void Server::enforce_asset_cache_limit() {
+  std::set<std::string> keep;  // assets of submits in progress: checked as present, not yet linked
+  for (const auto& [id, conn] : conns_)
+    for (const auto& [sid, p] : conn->pending)
+      for (const auto& a : p.submit.assets) keep.insert(a.sha256);
+  for (const auto& sha : assets_->evict(cfg_.max_asset_cache_bytes, keep))
+    log_.info("asset cache: evicted {} (least recently used, no job needs it; max_asset_cache_bytes {})", sha,
+              cfg_.max_asset_cache_bytes);
 }
 
 void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std::uint64_t job,

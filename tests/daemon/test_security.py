@@ -106,6 +106,27 @@ def test_memory_estimate(tmp, daemons):
     assert d.client().submit(small_cornell(width=32, height=32), name="ok", halt_=op.halt(spp=1))["type"] == "accepted"
 
 
+def test_asset_cache_lru(tmp, daemons):
+    d = Daemon(tmp, config="max_asset_cache_bytes: 100\n").start()
+    daemons.append(d)
+    c = d.client()
+    base = small_cornell(width=16, height=16).replace(
+        b"shapes:\n", b"shapes:\n  - {type: mesh, file: m.obj, material: FloorBSDF}\n", 1)
+    objs = [b"v -0.5 0.2 -0.5\nv 0.5 0.2 -0.5\nv 0 0.9 0\nf 1 2 3\n# %d padding padding\n" % i for i in range(3)]
+    sha = [__import__("hashlib").sha256(o).hexdigest() for o in objs]
+    j0 = c.submit(base, name="a", assets=[("m.obj", objs[0])], halt_=op.halt(spp=1))["job"]
+    wait_state(c, j0, {"done"})
+    assert c.job("delete", j0)["type"] == "ok"  # now no job needs objs[0]
+    j1 = c.submit(base, name="b", assets=[("m.obj", objs[1])], halt_=op.halt(spp=1))["job"]
+    d.wait_log(rf"asset cache: evicted {sha[0]}")
+    # objs[1] is needed by job b (queued or done, it holds a link): never evicted.
+    j2 = c.submit(base, name="c", assets=[("m.obj", objs[2])], halt_=op.halt(spp=1))["job"]
+    for j in (j1, j2):
+        wait_state(c, j, {"done"})
+    assert f"evicted {sha[1]}" not in d.log()
+    assert os.path.exists(os.path.join(d.state_dir, "assets", sha[1][:2], sha[1]))
+
+
 def test_half_frame_and_silent_clients_time_out(tmp, daemons):
     d = Daemon(tmp, config=CONFIG).start()
     daemons.append(d)
@@ -141,7 +162,7 @@ def test_open_tcp_needs_auth(tmp, daemons):
 
 if __name__ == "__main__":
     t = Test()
-    for fn in (test_tcp_handshake, test_owners_and_admins, test_job_limits, test_memory_estimate,
+    for fn in (test_tcp_handshake, test_owners_and_admins, test_job_limits, test_memory_estimate, test_asset_cache_lru,
                test_half_frame_and_silent_clients_time_out, test_open_tcp_needs_auth):
         t.run(fn)
     t.exit()
