@@ -95,6 +95,8 @@ Config load_config(const std::string& path) {
   r.scalar("frame_timeout_s", c.frame_timeout_s);
   r.scalar("handshake_timeout_s", c.handshake_timeout_s);
   r.strings("admins", c.admins);
+  r.scalar("tls_cert", c.tls_cert);
+  r.scalar("tls_key", c.tls_key);
   if (YAML::Node users = r.get("tcp_users")) {
     // user: TOKEN  or  user: {token_file: PATH}  (the file's first line is the token)
     if (!users.IsMap()) r.fail("tcp_users", users.Mark(), "expected a mapping of user to token");
@@ -146,6 +148,7 @@ void validate_config(const Config& c) {
   if (c.max_connections < 1) bad("max_connections: must be >= 1");
   if (c.max_pending_submits < 1) bad("max_pending_submits: must be >= 1");
   if (c.output_buffer_bytes < (1u << 16)) bad("output_buffer_bytes: must be >= 64 KiB");
+  if (c.tls_cert.empty() != c.tls_key.empty()) bad("tls_cert and tls_key: give both or neither");
   if (c.max_jobs_per_owner < 1) bad("max_jobs_per_owner: must be >= 1");
   if (c.max_resolution < 1) bad("max_resolution: must be >= 1");
   if (c.max_spp < 1) bad("max_spp: must be >= 1");

@@ -39,7 +39,8 @@ struct Config {
   // Access. TCP users and their tokens (shared secrets for the HMAC handshake); empty = TCP
   // without authentication (owner "tcp"), which is allowed only on loopback listeners.
   std::map<std::string, std::string> tcp_users;  // user -> token
-  std::vector<std::string> admins;  // identities that may act on any job: uids (unix) or TCP user names
+  std::vector<std::string> admins;
+  std::string tls_cert, tls_key;  // PEM files: when both are set, every TCP listener speaks TLS  // identities that may act on any job: uids (unix) or TCP user names
 };
 
 // Throws std::runtime_error "FILE: key: what" for an unreadable file, an unknown key or a bad

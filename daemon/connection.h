@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <openssl/ssl.h>
+
 #include "daemon/listener.h"
 #include "daemon/output_queue.h"
 #include "protocol/frame_decoder.h"
@@ -26,7 +28,9 @@ struct PendingSubmit {
 
 class Connection {
  public:
-  Connection(int fd, std::uint64_t id, Peer peer, const protocol::DecoderLimits& limits, std::size_t out_limit);
+  // ssl: a TLS session on fd (owned from now on), or nullptr for plain bytes.
+  Connection(int fd, std::uint64_t id, Peer peer, const protocol::DecoderLimits& limits, std::size_t out_limit,
+             SSL* ssl = nullptr);
   ~Connection();
   Connection(const Connection&) = delete;
   Connection& operator=(const Connection&) = delete;
@@ -51,7 +55,9 @@ class Connection {
                       std::shared_ptr<const std::string> payload);
   // Writes what the socket takes now. False on a write error (the peer is gone).
   bool flush();
-  bool wants_write() const { return !out_.empty(); }
+  bool wants_write() const { return !out_.empty() || tls_want_write_; }
+  bool tls() const { return ssl_ != nullptr; }
+  const std::string& tls_error() const { return tls_error_; }  // why a TLS session failed
   bool over_limit() const { return out_.owned_bytes() > out_limit_; }
   const OutputQueue& output() const { return out_; }
 
@@ -77,6 +83,12 @@ class Connection {
   std::optional<std::chrono::steady_clock::time_point> partial_since_;
   OutputQueue out_;
   std::size_t out_limit_;
+  SSL* ssl_ = nullptr;
+  bool tls_want_write_ = false;  // the TLS handshake waits for the socket to take bytes
+  std::string tls_error_;
+  // Plain or TLS I/O: > 0 bytes moved, 0 end of stream (read), -1 would block, -2 error.
+  long io_read(char* buf, std::size_t n);
+  long io_write(const char* buf, std::size_t n);
 };
 
 }  // namespace omega::daemon

@@ -45,6 +45,7 @@ void Server::start() {
   store_ = std::make_unique<JobStore>(cfg_.state_dir + "/jobs.sqlite");
   assets_ = std::make_unique<AssetCache>(cfg_.state_dir + "/assets");
   recover_jobs();
+  if (!cfg_.tls_cert.empty()) tls_ = std::make_unique<TlsContext>(cfg_.tls_cert, cfg_.tls_key);
   open_listeners();
 
   loop_.set_error_handler([this](const std::exception& e) {
@@ -58,8 +59,8 @@ void Server::start() {
   loop_.add_timer(1.0, [this] { sweep_timeouts(); });
   std::string where;
   for (const auto& l : listeners_) where += (where.empty() ? "" : ", ") + l.text();
-  log_.info("omegad ready: listening on {}; state in {}; {} render threads, {} job(s) at once", where,
-            cfg_.state_dir, resolve_threads(cfg_.threads), cfg_.max_running);
+  log_.info("omegad ready: listening on {}{}; state in {}; {} render threads, {} job(s) at once", where,
+            tls_ ? " (TCP over TLS)" : "", cfg_.state_dir, resolve_threads(cfg_.threads), cfg_.max_running);
   notify_ready("listening on " + where);
   reschedule();
 }
@@ -159,7 +160,17 @@ void Server::on_accept(std::size_t li) {
     limits.set_payload_limit(protocol::MessageType::submit, cfg_.max_submit_bytes);
     limits.set_payload_limit(protocol::MessageType::asset, cfg_.max_asset_bytes);
     std::uint64_t id = next_conn_++;
-    auto conn = std::make_unique<Connection>(fd, id, peer, limits, cfg_.output_buffer_bytes);
+    SSL* ssl = nullptr;
+    if (tls_ && !peer.unix_socket) {
+      try {
+        ssl = tls_->wrap(fd);
+      } catch (const std::exception& e) {
+        log_.error("connection from {}: {}", peer.name, e.what());
+        ::close(fd);
+        continue;
+      }
+    }
+    auto conn = std::make_unique<Connection>(fd, id, peer, limits, cfg_.output_buffer_bytes, ssl);
     log_.debug("connection {} from {}", id, peer.name);
     conns_.emplace(id, std::move(conn));
     loop_.add(fd, EPOLLIN | EPOLLRDHUP, [this, id](std::uint32_t ev) { on_connection_event(id, ev); });
@@ -189,7 +200,10 @@ void Server::on_connection_event(std::uint64_t id, std::uint32_t events) {
       }
     }
     if (st == Connection::ReadStatus::error) {
-      if (!c->dead) log_.info("connection {} ({}): read error; closing", id, c->peer().name);
+      if (!c->dead && !c->tls_error().empty())
+        log_.warn("connection {} ({}): TLS failed: {}; closing", id, c->peer().name, c->tls_error());
+      else if (!c->dead)
+        log_.info("connection {} ({}): read error; closing", id, c->peer().name);
       c->dead = true;
     } else if (st == Connection::ReadStatus::eof && !c->dead) {
       log_.debug("connection {} ({}): peer closed", id, c->peer().name);
@@ -208,7 +222,10 @@ void Server::finish_io(Connection& c) {
     c.dead = true;
   }
   if (!c.dead && !c.flush()) {
-    log_.info("connection {} ({}): write failed (peer gone); closing", c.id(), c.peer().name);
+    if (!c.tls_error().empty())
+      log_.warn("connection {} ({}): TLS failed: {}; closing", c.id(), c.peer().name, c.tls_error());
+    else
+      log_.info("connection {} ({}): write failed (peer gone); closing", c.id(), c.peer().name);
     c.dead = true;
   }
   if (!c.dead && c.closing && !c.wants_write()) c.dead = true;

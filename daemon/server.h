@@ -24,6 +24,7 @@
 #include "daemon/render_worker.h"
 #include "daemon/signals.h"
 #include "daemon/tile_publisher.h"
+#include "daemon/tls.h"
 
 namespace omega::daemon {
 
@@ -116,6 +117,7 @@ class Server : public FrameSink {
   std::unique_ptr<JobStore> store_;
   std::unique_ptr<AssetCache> assets_;
   std::vector<Listener> listeners_;
+  std::unique_ptr<TlsContext> tls_;  // set at start when tls_cert/tls_key are; TCP only
   std::map<std::uint64_t, std::unique_ptr<Connection>> conns_;
   std::set<std::uint64_t> dirty_;  // connections with output to flush at the end of this turn
   std::uint64_t next_conn_ = 1;
