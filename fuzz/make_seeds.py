@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Regenerates fuzz/corpus/{frames,messages,scene_yaml,mitsuba_xml} from the repository: every
+"""Regenerates fuzz/corpus/{frame_decoder,messages,scene_yaml,mitsuba_xml} from the repository: every
 example header in docs/protocol.md, the example scenes, and the XML scenes in the importer's tests.
 Usage: python3 fuzz/make_seeds.py  (from the repository root). tile_exr seeds come from a real
 daemon (tests/daemon) and are committed as they are."""
@@ -25,7 +25,7 @@ for m in re.finditer(r"^Header: `(\{.*\})`(?: · payload: (\d+) bytes)?$", doc, 
     payload = b"x" * int(m.group(2) or 0)
     put("messages", header + (b"\0" + payload if payload else b""))
     frame = b"OMG1" + struct.pack("<IQ", len(header), len(payload)) + header + payload
-    put("frames", bytes([7]) + frame + frame)  # first byte: the chunk size
+    put("frame_decoder", bytes([7]) + frame + frame)  # first byte: the chunk size
 for name in os.listdir(os.path.join(ROOT, "scenes")):
     if name.endswith(".yaml"):
         put("scene_yaml", open(os.path.join(ROOT, "scenes", name), "rb").read())
