@@ -4,6 +4,7 @@ import os
 import ssl
 import subprocess
 
+import harness
 from harness import OMEGAD, Daemon, Test, op, small_cornell, wait_state
 
 TOKEN = "alice-token-0123456789"
@@ -50,6 +51,14 @@ def test_tls_session(tmp, daemons):
     d.wait_log(r"TLS failed: ")
     # Unix sockets stay plain.
     assert d.client().welcome[0]["auth"] == "peer"
+    # The omega client over TLS: trusted with OMEGA_TLS_CA, refused without it.
+    tls_addr = "tls:" + d.tcp[4:]
+    env = dict(os.environ, OMEGA_USER="alice", OMEGA_TOKEN=TOKEN, OMEGA_TLS_CA=cert)
+    r = subprocess.run([harness.OMEGA, "list", "--host", tls_addr], env=env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and "alice" in r.stdout, (r.stdout, r.stderr)
+    env.pop("OMEGA_TLS_CA")
+    r = subprocess.run([harness.OMEGA, "list", "--host", tls_addr], env=env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 3 and "certificate not trusted" in r.stderr, (r.returncode, r.stderr)
 
 
 def test_bad_key_refused(tmp, daemons):
