@@ -3,7 +3,9 @@ locked by another process. Each keeps every accepted job and leaves a clear log 
 mid-pass is test_crash.py; a half frame held open is test_security.py.)"""
 import hashlib
 import os
+import random
 import sqlite3
+import subprocess
 import threading
 import time
 
@@ -102,8 +104,79 @@ def test_database_locked(tmp, daemons):
     wait_state(c, h["job"], {"done"})
 
 
+def test_kill9_at_random_moments(tmp, daemons):
+    """Rounds of: clients submit (with a fresh asset each time) and render; kill -9 after a random
+    delay (so at accept, during an upload, mid-pass or in a checkpoint write); restart. Every job
+    that got `accepted` must end done with its full spp."""
+    rng = random.Random(int(os.environ.get("OMEGA_FAULT_SEED", "7")))
+    scene = small_cornell(width=32, height=32).replace(
+        b"shapes:\n", b"shapes:\n  - {type: mesh, file: m.obj, material: FloorBSDF}\n", 1)
+    d = Daemon(tmp, config="max_running: 2\n")
+    daemons.append(d)
+    accepted = {}
+    n = 0
+    for round_ in range(6):
+        d.start()
+        stop = threading.Event()
+
+        def client():
+            nonlocal n
+            try:
+                c = d.client(timeout=5)
+                while not stop.is_set():
+                    n += 1
+                    obj = TRI_OBJ + b"# %d\n" % n + b"#" * rng.randrange(1, 200000) + b"\n"
+                    h = c.submit(scene, name=f"k{n}", assets=[("m.obj", obj)], halt_=op.halt(spp=6))
+                    if h.get("type") == "accepted":
+                        accepted[h["job"]] = 6
+            except (ConnectionError, OSError, TimeoutError):
+                pass
+
+        t = threading.Thread(target=client)
+        t.start()
+        time.sleep(rng.uniform(0.05, 1.5))
+        d.kill9()
+        stop.set()
+        t.join(10)
+    d.start()
+    d.wait_log(r"omegad ready")
+    c = d.client()
+    for job, spp in accepted.items():
+        info = wait_state(c, job, {"done"}, timeout=120)
+        assert info["progress"]["spp"] == spp, info
+    print(f"  6 kill -9 rounds, {len(accepted)} accepted jobs, all done")
+
+
+def test_disk_full(tmp, daemons):
+    """The state dir on a small tmpfs: a submit that does not fit gets `busy` naming the disk,
+    the daemon carries on, and jobs accepted before still finish."""
+    mnt = os.path.join(tmp, "small")
+    os.makedirs(mnt)
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", mnt], capture_output=True).returncode != 0:
+        print("  SKIP test_disk_full: cannot mount a tmpfs here (needs root)")
+        return
+    try:
+        d = Daemon(tmp, config="max_running: 1\n", state_dir=os.path.join(mnt, "state")).start()
+        daemons.append(d)
+        c = d.client()
+        scene = small_cornell(width=32, height=32).replace(
+            b"shapes:\n", b"shapes:\n  - {type: mesh, file: m.obj, material: FloorBSDF}\n", 1)
+        first = c.submit(scene, name="fits", assets=[("m.obj", TRI_OBJ)], halt_=op.halt(spp=4))
+        assert first["type"] == "accepted", first
+        big = TRI_OBJ + b"#" * (6 << 20) + b"\n"
+        h = c.submit(scene, name="too-big", assets=[("m.obj", big)], halt_=op.halt(spp=1))
+        assert h["type"] == "error" and h["code"] == "busy" and "space" in h["message"].lower(), h
+        d.wait_log(r"No space left on device")
+        info = wait_state(c, first["job"], {"done"})
+        assert info["progress"]["spp"] == 4, info
+        d.stop()
+    finally:
+        subprocess.run(["umount", "-l", mnt], capture_output=True)
+
+
 if __name__ == "__main__":
     t = Test()
-    for fn in (test_corrupt_checkpoint, test_corrupt_cached_asset, test_database_locked):
+    for fn in (test_corrupt_checkpoint, test_corrupt_cached_asset, test_database_locked, test_kill9_at_random_moments,
+               test_disk_full):
         t.run(fn)
     t.exit()
