@@ -167,6 +167,8 @@ def test_disk_full(tmp, daemons):
         h = c.submit(scene, name="too-big", assets=[("m.obj", big)], halt_=op.halt(spp=1))
         assert h["type"] == "error" and h["code"] == "busy" and "space" in h["message"].lower(), h
         d.wait_log(r"No space left on device")
+        # The half-written asset was removed, so the disk has room again for the job's own writes.
+        assert not [f for _, _, fs in os.walk(os.path.join(mnt, "state")) for f in fs if f.endswith(".tmp")]
         info = wait_state(c, first["job"], {"done"})
         assert info["progress"]["spp"] == 4, info
         d.stop()
