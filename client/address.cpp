@@ -12,14 +12,15 @@ namespace omega::client {
 
 std::string Address::text() const {
     if (kind == Kind::unix_socket) return "unix:" + path;
-    if (host.find(':') != std::string::npos) return fmt::format("tcp:[{}]:{}", host, port);
-    return fmt::format("tcp:{}:{}", host, port);
+    const char* scheme = tls ? "tls" : "tcp";
+    if (host.find(':') != std::string::npos) return fmt::format("{}:[{}]:{}", scheme, host, port);
+    return fmt::format("{}:{}:{}", scheme, host, port);
 }
 
 Address parse_address(const std::string& text) {
     auto bad = [&](const std::string& why) {
         return ClientError(kExitBadInput,
-                           fmt::format("bad daemon address '{}': {} (expected unix:/path or tcp:host:port)", text, why));
+                           fmt::format("bad daemon address '{}': {} (expected unix:/path, tcp:host:port or tls:host:port)", text, why));
     };
     Address a;
     if (text.rfind("unix:", 0) == 0) {
@@ -30,8 +31,9 @@ Address parse_address(const std::string& text) {
         if (a.path.size() >= 108) throw bad("socket path longer than 107 bytes");
         return a;
     }
-    if (text.rfind("tcp:", 0) == 0) {
+    if (text.rfind("tcp:", 0) == 0 || text.rfind("tls:", 0) == 0) {
         a.kind = Address::Kind::tcp;
+        a.tls = text[1] == 'l';
         std::string rest = text.substr(4);
         std::string port;
         if (!rest.empty() && rest[0] == '[') {

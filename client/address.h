@@ -1,5 +1,5 @@
 #pragma once
-// Daemon addresses: `unix:/path` or `tcp:host:port` (docs/client.md).
+// Daemon addresses: `unix:/path`, `tcp:host:port` or `tls:host:port` (docs/client.md).
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -13,6 +13,7 @@ struct Address {
     std::string path;  // unix
     std::string host;  // tcp (a name, an IPv4 address, or an IPv6 address in brackets or bare)
     uint16_t port = 0;  // tcp
+    bool tls = false;   // tcp: `tls:host:port`, TCP wrapped in TLS (the daemon's tls_cert)
     std::string text() const;  // as the user writes it
 };
 

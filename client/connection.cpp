@@ -7,7 +7,10 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <openssl/evp.h>
+#include <openssl/err.h>
 #include <openssl/hmac.h>
+#include <openssl/ssl.h>
+#include <openssl/x509v3.h>
 #include <poll.h>
 #include <pwd.h>
 #include <sys/socket.h>
@@ -28,7 +31,7 @@ namespace proto = omega::protocol;
 FrameSocket::FrameSocket(int fd, proto::DecoderLimits limits) : fd_(fd), decoder_(limits) {}
 FrameSocket::~FrameSocket() { close(); }
 FrameSocket::FrameSocket(FrameSocket&& o) noexcept
-    : fd_(o.fd_), decoder_(std::move(o.decoder_)), pending_(std::move(o.pending_)), error_(std::move(o.error_)) {
+    : fd_(o.fd_), ssl_(std::move(o.ssl_)), decoder_(std::move(o.decoder_)), pending_(std::move(o.pending_)), error_(std::move(o.error_)) {
     o.fd_ = -1;
 }
 FrameSocket& FrameSocket::operator=(FrameSocket&& o) noexcept {
@@ -36,6 +39,7 @@ FrameSocket& FrameSocket::operator=(FrameSocket&& o) noexcept {
         close();
         fd_ = o.fd_;
         o.fd_ = -1;
+        ssl_ = std::move(o.ssl_);
         decoder_ = std::move(o.decoder_);
         pending_ = std::move(o.pending_);
         error_ = std::move(o.error_);
@@ -44,6 +48,7 @@ FrameSocket& FrameSocket::operator=(FrameSocket&& o) noexcept {
 }
 
 void FrameSocket::close() {
+    ssl_.reset();
     if (fd_ >= 0) ::close(fd_);
     fd_ = -1;
 }
@@ -53,6 +58,12 @@ void FrameSocket::send(const proto::Frame& f) {
     const std::string bytes = proto::encode_frame(f);
     size_t done = 0;
     while (done < bytes.size()) {
+        if (ssl_) {
+            const int n = SSL_write(ssl_.get(), bytes.data() + done, int(std::min<size_t>(bytes.size() - done, 1 << 30)));
+            if (n <= 0) throw std::runtime_error("TLS write failed");
+            done += size_t(n);
+            continue;
+        }
         const ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
         if (n < 0) {
             if (errno == EINTR) continue;
@@ -82,7 +93,8 @@ FrameSocket::ReadStatus FrameSocket::read(Clock::time_point deadline, proto::Dec
         if (now >= deadline) return ReadStatus::timeout;
         const auto ms = std::chrono::duration_cast<milliseconds>(deadline - now).count();
         pollfd p{fd_, POLLIN, 0};
-        const int r = ::poll(&p, 1, int(std::min<long long>(ms + 1, 1 << 30)));
+        // Bytes OpenSSL already decrypted are invisible to poll.
+        const int r = ssl_ && SSL_pending(ssl_.get()) > 0 ? 1 : ::poll(&p, 1, int(std::min<long long>(ms + 1, 1 << 30)));
         if (r < 0) {
             if (errno == EINTR) continue;
             error_ = std::string("poll: ") + std::strerror(errno);
@@ -90,7 +102,18 @@ FrameSocket::ReadStatus FrameSocket::read(Clock::time_point deadline, proto::Dec
         }
         if (r == 0) continue;  // re-checks the deadline
         char buf[65536];
-        const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+        ssize_t n = 0;
+        if (ssl_) {
+            n = SSL_read(ssl_.get(), buf, sizeof buf);
+            if (n <= 0) {
+                const int e = SSL_get_error(ssl_.get(), int(n));
+                if (e == SSL_ERROR_WANT_READ || e == SSL_ERROR_WANT_WRITE) continue;
+                n = (e == SSL_ERROR_ZERO_RETURN || (e == SSL_ERROR_SYSCALL && ERR_peek_error() == 0)) ? 0 : -1;
+                if (n < 0) errno = EPROTO;
+            }
+        } else {
+            n = ::recv(fd_, buf, sizeof buf, 0);
+        }
         if (n < 0) {
             if (errno == EINTR || errno == EAGAIN) continue;
             error_ = std::string("recv: ") + std::strerror(errno);
@@ -109,6 +132,40 @@ FrameSocket::ReadStatus FrameSocket::read(Clock::time_point deadline, proto::Dec
         }
         pending_.append(buf, size_t(n));
     }
+}
+
+void FrameSocket::start_tls(const std::string& host) {
+    std::unique_ptr<SSL_CTX, decltype(&SSL_CTX_free)> ctx(SSL_CTX_new(TLS_client_method()), &SSL_CTX_free);
+    if (!ctx) throw std::runtime_error("cannot create a TLS context");
+    SSL_CTX_set_min_proto_version(ctx.get(), TLS1_2_VERSION);
+    SSL_CTX_set_verify(ctx.get(), SSL_VERIFY_PEER, nullptr);
+    const char* ca = std::getenv("OMEGA_TLS_CA");
+    if (ca && *ca) {
+        if (SSL_CTX_load_verify_locations(ctx.get(), ca, nullptr) != 1)
+            throw std::runtime_error(fmt::format("cannot read the CA file '{}' ($OMEGA_TLS_CA)", ca));
+    } else {
+        SSL_CTX_set_default_verify_paths(ctx.get());
+    }
+    std::shared_ptr<SSL> ssl(SSL_new(ctx.get()), &SSL_free);
+    if (!ssl || SSL_set_fd(ssl.get(), fd_) != 1) throw std::runtime_error("cannot start a TLS session");
+    X509_VERIFY_PARAM* param = SSL_get0_param(ssl.get());
+    in6_addr a6{};
+    in_addr a4{};
+    const bool ip = inet_pton(AF_INET, host.c_str(), &a4) == 1 || inet_pton(AF_INET6, host.c_str(), &a6) == 1;
+    if (ip) {
+        X509_VERIFY_PARAM_set1_ip_asc(param, host.c_str());
+    } else {
+        SSL_set_tlsext_host_name(ssl.get(), host.c_str());
+        SSL_set1_host(ssl.get(), host.c_str());
+    }
+    if (SSL_connect(ssl.get()) != 1) {
+        const long v = SSL_get_verify_result(ssl.get());
+        char buf[256] = "handshake failed";
+        if (unsigned long e = ERR_get_error()) ERR_error_string_n(e, buf, sizeof buf);
+        throw std::runtime_error(v != X509_V_OK ? fmt::format("certificate not trusted: {}", X509_verify_cert_error_string(v))
+                                                : std::string(buf));
+    }
+    ssl_ = std::move(ssl);
 }
 
 // ---------------------------------------------------------------- connecting
@@ -256,6 +313,13 @@ Connection Connection::open(const Address& addr, const ConnectOptions& opts) {
     if (fd < 0)
         throw ClientError(kExitUnreachable, fmt::format("cannot reach the daemon at {}: {}", addr.text(), why), true);
     Connection c(addr, opts, fd);
+    if (addr.tls) {
+        try {
+            c.sock_->start_tls(addr.host);
+        } catch (const std::exception& e) {
+            throw ClientError(kExitUnreachable, fmt::format("TLS with the daemon at {}: {}", addr.text(), e.what()), true);
+        }
+    }
     c.handshake();
     return c;
 }

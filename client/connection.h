@@ -14,6 +14,8 @@
 #include "protocol/frame_decoder.h"
 #include "protocol/messages.h"
 
+struct ssl_st;
+
 namespace omega::client {
 
 using Clock = std::chrono::steady_clock;
@@ -38,9 +40,13 @@ public:
     ReadStatus read(Clock::time_point deadline, protocol::DecodedFrame& out);
     const std::string& error() const { return error_; }
     void close();
+    // Wraps the (blocking, connected) socket in TLS and verifies the daemon's certificate for
+    // `host` against $OMEGA_TLS_CA (a PEM file) or the system's CAs. Throws std::runtime_error.
+    void start_tls(const std::string& host);
 
 private:
     int fd_ = -1;
+    std::shared_ptr<ssl_st> ssl_;  // TLS session, or null for plain bytes
     protocol::FrameDecoder decoder_;
     std::string pending_;  // bytes read but not yet taken by the decoder
     std::string error_;

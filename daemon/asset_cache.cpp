@@ -1,7 +1,11 @@
 #include "daemon/asset_cache.h"
 
 #include <openssl/evp.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <tuple>
 
 #include <filesystem>
 #include <memory>
@@ -53,8 +57,35 @@ void AssetCache::materialize(const std::string& sha, std::uint64_t size, const s
     throw std::runtime_error("cached asset " + sha + " is corrupt (removed); send it again");
   }
   fs::create_directories(fs::path(dest).parent_path());
+  std::error_code ec;
+  fs::last_write_time(src, fs::file_time_type::clock::now(), ec);  // most recently used
   if (::link(src.c_str(), dest.c_str()) == 0) return;
   write_file_atomic(dest, data);
+}
+
+std::vector<std::string> AssetCache::evict(std::uint64_t max_bytes, const std::set<std::string>& keep) {
+  std::uint64_t total = 0;
+  std::vector<std::tuple<std::int64_t, std::string, std::uint64_t>> free;  // (mtime ns, sha, size)
+  std::error_code ec;
+  for (const auto& e : fs::recursive_directory_iterator(dir_, ec)) {
+    struct stat st{};
+    if (::lstat(e.path().c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
+    total += std::uint64_t(st.st_size);
+    std::string sha = e.path().filename().string();
+    if (st.st_nlink == 1 && !keep.count(sha))
+      free.emplace_back(std::int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec, sha, std::uint64_t(st.st_size));
+  }
+  std::vector<std::string> evicted;
+  if (total <= max_bytes) return evicted;
+  std::sort(free.begin(), free.end());
+  for (const auto& [t, sha, size] : free) {
+    if (total <= max_bytes) break;
+    if (fs::remove(path_of(sha), ec)) {
+      total -= size;
+      evicted.push_back(sha);
+    }
+  }
+  return evicted;
 }
 
 }  // namespace omega::daemon

@@ -51,6 +51,7 @@ void write_file_atomic(const std::string& path, std::string_view data) {
     if (n < 0) {
       int e = errno;
       ::close(fd);
+      ::unlink(tmp.c_str());  // a full disk must not stay full because of our half-written file
       errno = e;
       io_fail(tmp, "write");
     }
@@ -59,11 +60,17 @@ void write_file_atomic(const std::string& path, std::string_view data) {
   if (::fsync(fd) < 0) {
     int e = errno;
     ::close(fd);
+    ::unlink(tmp.c_str());
     errno = e;
     io_fail(tmp, "fsync");
   }
   ::close(fd);
-  if (::rename(tmp.c_str(), path.c_str()) < 0) io_fail(path, "rename");
+  if (::rename(tmp.c_str(), path.c_str()) < 0) {
+    int e = errno;
+    ::unlink(tmp.c_str());
+    errno = e;
+    io_fail(path, "rename");
+  }
   std::string dir = std::filesystem::path(path).parent_path().string();
   int dfd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dfd >= 0) {

@@ -67,8 +67,10 @@ TEST(Listener, RefusesNonLoopbackTcp) {
   EXPECT_EQ(parse_listen_address("tcp:127.0.0.1:7171").port, 7171);
   EXPECT_EQ(parse_listen_address("tcp:[::1]:80").host, "::1");
   EXPECT_EQ(parse_listen_address("unix:/run/x.sock").path, "/run/x.sock");
-  EXPECT_THROW(parse_listen_address("tcp:0.0.0.0:7171"), std::invalid_argument);
-  EXPECT_THROW(parse_listen_address("tcp:192.168.1.2:7171"), std::invalid_argument);
+  EXPECT_FALSE(parse_listen_address("tcp:0.0.0.0:7171").loopback);  // the Server refuses it without auth
+  EXPECT_FALSE(parse_listen_address("tcp:192.168.1.2:7171").loopback);
+  EXPECT_TRUE(parse_listen_address("tcp:127.0.0.2:7171").loopback);
+  EXPECT_EQ(parse_listen_address("tcp::7171").host, "127.0.0.1");
   EXPECT_THROW(parse_listen_address("tcp:127.0.0.1:99999"), std::invalid_argument);
   EXPECT_THROW(parse_listen_address("http://x"), std::invalid_argument);
 }

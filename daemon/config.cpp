@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <stdexcept>
 
@@ -85,12 +86,54 @@ Config load_config(const std::string& path) {
   r.scalar("max_connections", c.max_connections);
   r.scalar("max_pending_submits", c.max_pending_submits);
   r.scalar("max_queued_jobs", c.max_queued_jobs);
+  r.scalar("max_asset_cache_bytes", c.max_asset_cache_bytes);
+  r.scalar("max_jobs_per_owner", c.max_jobs_per_owner);
+  r.scalar("max_resolution", c.max_resolution);
+  r.scalar("max_spp", c.max_spp);
+  r.scalar("max_time_s", c.max_time_s);
+  r.scalar("max_scene_memory_bytes", c.max_scene_memory_bytes);
+  r.scalar("frame_timeout_s", c.frame_timeout_s);
+  r.scalar("handshake_timeout_s", c.handshake_timeout_s);
+  r.strings("admins", c.admins);
+  r.scalar("tls_cert", c.tls_cert);
+  r.scalar("tls_key", c.tls_key);
+  if (YAML::Node users = r.get("tcp_users")) {
+    // user: TOKEN  or  user: {token_file: PATH}  (the file's first line is the token)
+    if (!users.IsMap()) r.fail("tcp_users", users.Mark(), "expected a mapping of user to token");
+    for (const auto& kv : users) {
+      const std::string user = kv.first.as<std::string>();
+      std::string token;
+      if (kv.second.IsScalar()) {
+        token = kv.second.Scalar();
+      } else if (kv.second.IsMap() && kv.second.size() == 1 && kv.second["token_file"] &&
+                 kv.second["token_file"].IsScalar()) {
+        const std::string file = kv.second["token_file"].Scalar();
+        std::ifstream in(file);
+        if (!in) r.fail("tcp_users." + user, kv.second.Mark(), "cannot read the token file '" + file + "'");
+        std::getline(in, token);
+      } else {
+        r.fail("tcp_users." + user, kv.second.Mark(), "expected a token or {token_file: PATH}");
+      }
+      if (!valid_tcp_user_name(user))
+        r.fail("tcp_users." + user, kv.first.Mark(), "a TCP user name must be printable, not all digits and not 'tcp'");
+      if (token.size() < 16) r.fail("tcp_users." + user, kv.second.Mark(), "the token must be at least 16 bytes");
+      c.tcp_users[user] = token;
+    }
+  }
   for (const auto& kv : root) {
     std::string key = kv.first.as<std::string>();
     if (!r.seen.count(key)) r.fail(key, kv.first.Mark(), "unknown key");
   }
   validate_config(c);
   return c;
+}
+
+bool valid_tcp_user_name(const std::string& name) {
+  if (name.empty() || name.size() > 256 || name == "tcp") return false;
+  if (name.find_first_not_of("0123456789") == std::string::npos) return false;
+  for (unsigned char ch : name)
+    if (ch < 0x21 || ch == 0x7f) return false;
+  return true;
 }
 
 void validate_config(const Config& c) {
@@ -105,6 +148,15 @@ void validate_config(const Config& c) {
   if (c.max_connections < 1) bad("max_connections: must be >= 1");
   if (c.max_pending_submits < 1) bad("max_pending_submits: must be >= 1");
   if (c.output_buffer_bytes < (1u << 16)) bad("output_buffer_bytes: must be >= 64 KiB");
+  if (c.tls_cert.empty() != c.tls_key.empty()) bad("tls_cert and tls_key: give both or neither");
+  if (c.max_jobs_per_owner < 1) bad("max_jobs_per_owner: must be >= 1");
+  if (c.max_resolution < 1) bad("max_resolution: must be >= 1");
+  if (c.max_spp < 1) bad("max_spp: must be >= 1");
+  if (!(c.max_time_s > 0)) bad("max_time_s: must be > 0");
+  if (c.frame_timeout_s < 0) bad("frame_timeout_s: must be >= 0");
+  if (!(c.handshake_timeout_s > 0)) bad("handshake_timeout_s: must be > 0");
+  for (const auto& [user, token] : c.tcp_users)
+    if (!valid_tcp_user_name(user)) bad("tcp_users: '" + user + "' is not a valid TCP user name");
   for (const auto& r : c.allowed_roots)
     if (!std::filesystem::path(r).is_absolute()) bad("allowed_roots: '" + r + "' is not an absolute path");
 }

@@ -2,6 +2,7 @@
 // omegad's configuration: a YAML file (docs/daemon.md lists every key) overridden by the command
 // line. Loaded at start-up and again on SIGHUP (listeners and state_dir only take effect at start).
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -27,11 +28,28 @@ struct Config {
   int max_connections = 1024;
   int max_pending_submits = 4;  // per connection
   int max_queued_jobs = 10000;
+  std::uint64_t max_asset_cache_bytes = 16ull << 30;  // LRU eviction of assets no job needs
+  int max_jobs_per_owner = 1000;       // unfinished jobs of one owner (`busy` beyond)
+  int max_resolution = 16384;          // film width and height, each
+  std::uint64_t max_spp = 1ull << 24;  // a job's spp halt (and the default when it has none)
+  double max_time_s = 7 * 86400.0;     // a job's time halt
+  std::uint64_t max_scene_memory_bytes = 8ull << 30;  // estimated memory of a built scene + film
+  double frame_timeout_s = 30;         // a frame begun must be complete within this (0: never)
+  double handshake_timeout_s = 10;     // hello (and auth on TCP) must be done within this
+  // Access. TCP users and their tokens (shared secrets for the HMAC handshake); empty = TCP
+  // without authentication (owner "tcp"), which is allowed only on loopback listeners.
+  std::map<std::string, std::string> tcp_users;  // user -> token
+  std::vector<std::string> admins;
+  std::string tls_cert, tls_key;  // PEM files: when both are set, every TCP listener speaks TLS  // identities that may act on any job: uids (unix) or TCP user names
 };
 
 // Throws std::runtime_error "FILE: key: what" for an unreadable file, an unknown key or a bad
 // value. An empty path gives the defaults.
 Config load_config(const std::string& path);
+
+// A TCP user name the config may define: non-empty, printable, not all digits (those are unix
+// uids) and not "tcp" (the anonymous loopback identity).
+bool valid_tcp_user_name(const std::string& name);
 
 // Checks a whole config (after command-line overrides). Throws std::runtime_error.
 void validate_config(const Config& c);

@@ -4,16 +4,69 @@
 #include <sys/uio.h>
 #include <unistd.h>
 
+#include <openssl/err.h>
+
+#include <algorithm>
 #include <cerrno>
+
+#include "daemon/tls.h"
 
 namespace omega::daemon {
 
 Connection::Connection(int fd, std::uint64_t id, Peer peer, const protocol::DecoderLimits& limits,
-                       std::size_t out_limit)
-    : fd_(fd), id_(id), peer_(std::move(peer)), decoder_(limits), out_limit_(out_limit) {}
+                       std::size_t out_limit, SSL* ssl)
+    : fd_(fd), id_(id), peer_(std::move(peer)), decoder_(limits), out_limit_(out_limit), ssl_(ssl) {}
 
 Connection::~Connection() {
+  if (ssl_) SSL_free(ssl_);
   if (fd_ >= 0) close(fd_);
+}
+
+long Connection::io_read(char* buf, std::size_t n) {
+  if (!ssl_) {
+    for (;;) {
+      ssize_t r = ::recv(fd_, buf, n, 0);
+      if (r >= 0) return r;
+      if (errno == EINTR) continue;
+      return errno == EAGAIN || errno == EWOULDBLOCK ? -1 : -2;
+    }
+  }
+  int r = SSL_read(ssl_, buf, static_cast<int>(n));
+  if (r > 0) {
+    tls_want_write_ = false;
+    return r;
+  }
+  switch (SSL_get_error(ssl_, r)) {
+    case SSL_ERROR_WANT_READ: tls_want_write_ = false; return -1;
+    case SSL_ERROR_WANT_WRITE: tls_want_write_ = true; return -1;
+    case SSL_ERROR_ZERO_RETURN: return 0;
+    case SSL_ERROR_SYSCALL:
+      if (ERR_peek_error() == 0) return errno == 0 ? 0 : -2;  // the peer closed without close_notify
+      [[fallthrough]];
+    default:
+      tls_error_ = tls_error_text();
+      return -2;
+  }
+}
+
+long Connection::io_write(const char* buf, std::size_t n) {
+  if (!ssl_) {
+    for (;;) {
+      ssize_t w = ::send(fd_, buf, n, MSG_NOSIGNAL | MSG_DONTWAIT);
+      if (w >= 0) return w;
+      if (errno == EINTR) continue;
+      return errno == EAGAIN || errno == EWOULDBLOCK ? -1 : -2;
+    }
+  }
+  int w = SSL_write(ssl_, buf, static_cast<int>(std::min<std::size_t>(n, 1 << 30)));
+  if (w > 0) return w;
+  switch (SSL_get_error(ssl_, w)) {
+    case SSL_ERROR_WANT_READ:
+    case SSL_ERROR_WANT_WRITE: return -1;
+    default:
+      tls_error_ = tls_error_text();
+      return -2;
+  }
 }
 
 Connection::ReadStatus Connection::read_frames(std::vector<protocol::DecodedFrame>& out) {
@@ -21,7 +74,8 @@ Connection::ReadStatus Connection::read_frames(std::vector<protocol::DecodedFram
   std::size_t total = 0;
   char buf[65536];
   ReadStatus status = ReadStatus::open;
-  while (total < kBudget && !decoder_.failed()) {
+  // With TLS, also drain what OpenSSL already decrypted: epoll cannot see those bytes.
+  while ((total < kBudget || (ssl_ && SSL_pending(ssl_) > 0)) && !decoder_.failed()) {
     // Feed what is buffered first; the decoder pauses when it holds max_ready_frames.
     while (!inbuf_.empty() && !decoder_.failed()) {
       std::size_t took = decoder_.feed(std::string_view(inbuf_));
@@ -30,7 +84,7 @@ Connection::ReadStatus Connection::read_frames(std::vector<protocol::DecodedFram
       if (took == 0 && decoder_.ready_frames() == 0) break;
     }
     if (decoder_.failed() || !inbuf_.empty()) break;
-    ssize_t n = recv(fd_, buf, sizeof buf, 0);
+    long n = io_read(buf, sizeof buf);
     if (n > 0) {
       total += std::size_t(n);
       inbuf_.append(buf, std::size_t(n));
@@ -41,14 +95,18 @@ Connection::ReadStatus Connection::read_frames(std::vector<protocol::DecodedFram
       status = ReadStatus::eof;
       break;
     }
-    if (errno == EINTR) continue;
-    if (errno != EAGAIN && errno != EWOULDBLOCK) {
+    if (n == -2) {
       decoder_.finish();  // a reset inside a frame is a truncated frame
       status = ReadStatus::error;
     }
     break;
   }
   while (auto f = decoder_.next()) out.push_back(std::move(*f));
+  if (decoder_.at_frame_boundary() && inbuf_.empty()) {
+    partial_since_.reset();
+  } else if (total > 0 || !partial_since_) {
+    partial_since_ = std::chrono::steady_clock::now();  // inside a frame, and bytes came
+  }
   return status;
 }
 
@@ -64,6 +122,32 @@ void Connection::send_coalesced(const CoalesceKey& key, const std::string& heade
 }
 
 bool Connection::flush() {
+  if (ssl_) {
+    if (!SSL_is_init_finished(ssl_)) {  // drive the handshake (also when EPOLLOUT woke us)
+      int r = SSL_do_handshake(ssl_);
+      if (r != 1) {
+        int e = SSL_get_error(ssl_, r);
+        if (e == SSL_ERROR_WANT_READ || e == SSL_ERROR_WANT_WRITE) {
+          tls_want_write_ = e == SSL_ERROR_WANT_WRITE;
+          return true;
+        }
+        tls_error_ = tls_error_text();
+        return false;
+      }
+      tls_want_write_ = false;
+    }
+    while (!out_.empty()) {
+      iovec iov[2];  // fill_iov wants room for a frame's head and payload; one write each
+      if (out_.fill_iov(iov, 2) == 0) break;
+      long w = io_write(static_cast<const char*>(iov[0].iov_base), iov[0].iov_len);
+      if (w > 0) {
+        out_.consume(std::size_t(w));
+        continue;
+      }
+      return w == -1;
+    }
+    return true;
+  }
   while (!out_.empty()) {
     iovec iov[64];
     int n = out_.fill_iov(iov, 64);

@@ -76,13 +76,23 @@ void EventLoop::post(std::function<void()> fn) {
   (void)r;  // EAGAIN only when the counter is saturated: the loop is awake anyway
 }
 
+template <class F>
+void EventLoop::guarded(F&& f) {
+  if (!on_error_) return f();
+  try {
+    f();
+  } catch (const std::exception& e) {
+    on_error_(e);
+  }
+}
+
 void EventLoop::drain_posted() {
   std::vector<std::function<void()>> batch;
   {
     std::lock_guard lock(posted_mutex_);
     batch.swap(posted_);
   }
-  for (auto& fn : batch) fn();
+  for (auto& fn : batch) guarded(fn);
 }
 
 int EventLoop::timeout_ms() const {
@@ -97,7 +107,7 @@ void EventLoop::fire_timers() {
   while (!timers_.empty() && timers_.begin()->first <= now) {
     auto fn = std::move(timers_.begin()->second.second);
     timers_.erase(timers_.begin());
-    fn();
+    guarded(fn);
   }
 }
 
@@ -114,7 +124,7 @@ void EventLoop::run() {
       auto it = handlers_.find(events[i].data.fd);
       if (it == handlers_.end()) continue;  // removed by an earlier handler in this batch
       std::shared_ptr<Handler> h = it->second;  // keeps it alive if it removes itself
-      (*h)(events[i].events);
+      guarded([&] { (*h)(events[i].events); });
     }
     fire_timers();
   }

@@ -3,6 +3,7 @@
 // with post(), which wakes it through an eventfd.
 #include <chrono>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <map>
 #include <memory>
@@ -37,11 +38,18 @@ class EventLoop {
   // Loop thread: dispatches until stop().
   void run();
   void stop() { running_ = false; }  // loop thread
+  // Before run(): called (loop thread) with an exception a handler, timer or posted function
+  // threw, e.g. SQLite "database is locked" after its busy timeout. The loop carries on. Without
+  // one, the exception leaves run().
+  void set_error_handler(std::function<void(const std::exception&)> fn) { on_error_ = std::move(fn); }
 
  private:
   void drain_posted();
   int timeout_ms() const;
   void fire_timers();
+  template <class F>
+  void guarded(F&& f);
+  std::function<void(const std::exception&)> on_error_;
 
   int epfd_ = -1;
   int wakefd_ = -1;

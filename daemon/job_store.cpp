@@ -174,6 +174,13 @@ std::size_t JobStore::count_unfinished() {
   return static_cast<std::size_t>(sqlite3_column_int64(s.get(), 0));
 }
 
+std::size_t JobStore::count_unfinished(const std::string& owner) {
+  Stmt s(db_, "SELECT count(*) FROM jobs WHERE owner = ? AND state IN ('queued', 'running', 'paused')", path_);
+  s.bind(1, owner);
+  s.step();
+  return static_cast<std::size_t>(sqlite3_column_int64(s.get(), 0));
+}
+
 void JobStore::set_state(std::uint64_t id, protocol::JobState st, const std::string& message) {
   Stmt s(db_, "UPDATE jobs SET state = ?, message = ? WHERE id = ?", path_);
   s.bind(1, std::string(protocol::to_string(st))).bind(2, message).bind(3, static_cast<std::int64_t>(id));

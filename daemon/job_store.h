@@ -46,6 +46,7 @@ class JobStore {
   // Queued jobs in run order: priority (high first), then FIFO.
   std::vector<JobRecord> queued();
   std::size_t count_unfinished();
+  std::size_t count_unfinished(const std::string& owner);  // max_jobs_per_owner
 
   void set_state(std::uint64_t id, protocol::JobState s, const std::string& message = {});
   void set_priority(std::uint64_t id, std::int64_t p);

@@ -32,6 +32,17 @@ bool is_loopback_host(const std::string& h) {
   return false;
 }
 
+bool is_loopback_sockaddr(const sockaddr_storage& ss) {
+  if (ss.ss_family == AF_INET)
+    return (ntohl(reinterpret_cast<const sockaddr_in*>(&ss)->sin_addr.s_addr) >> 24) == 127;
+  if (ss.ss_family == AF_INET6) {
+    const in6_addr& a = reinterpret_cast<const sockaddr_in6*>(&ss)->sin6_addr;
+    if (IN6_IS_ADDR_LOOPBACK(&a)) return true;
+    return IN6_IS_ADDR_V4MAPPED(&a) && a.s6_addr[12] == 127;
+  }
+  return false;
+}
+
 std::string sockaddr_text(const sockaddr_storage& ss) {
   char buf[INET6_ADDRSTRLEN] = "?";
   int port = 0;
@@ -80,9 +91,7 @@ ListenAddress parse_listen_address(const std::string& s) {
       throw std::invalid_argument("listen address '" + s + "': bad port '" + port + "'");
     a.port = std::stoi(port);
     if (a.host.empty()) a.host = "127.0.0.1";
-    if (!is_loopback_host(a.host))
-      throw std::invalid_argument("listen address '" + s + "': TCP may only bind a loopback address (127.0.0.0/8, ::1, "
-                                  "localhost) until TCP authentication is implemented");
+    a.loopback = is_loopback_host(a.host);
     return a;
   }
   throw std::invalid_argument("listen address '" + s + "': expected unix:PATH or tcp:HOST:PORT");
@@ -144,6 +153,7 @@ Listener::Listener(const ListenAddress& a) {
     socklen_t len = sizeof ss;
     getsockname(fd_, reinterpret_cast<sockaddr*>(&ss), &len);
     text_ = "tcp:" + sockaddr_text(ss);
+    loopback_ = is_loopback_sockaddr(ss);
   }
   if (listen(fd_, 128) < 0) {
     int e = errno;
@@ -165,12 +175,13 @@ Listener Listener::adopt(int fd) {
     l.text_ = fmt::format("unix:{} (systemd)", su->sun_path);
   } else {
     l.text_ = "tcp:" + sockaddr_text(ss) + " (systemd)";
+    l.loopback_ = is_loopback_sockaddr(ss);
   }
   return l;
 }
 
 Listener::Listener(Listener&& o) noexcept
-    : fd_(o.fd_), unix_(o.unix_), owns_path_(o.owns_path_), path_(std::move(o.path_)), text_(std::move(o.text_)) {
+    : fd_(o.fd_), unix_(o.unix_), loopback_(o.loopback_), owns_path_(o.owns_path_), path_(std::move(o.path_)), text_(std::move(o.text_)) {
   o.fd_ = -1;
   o.owns_path_ = false;
 }
@@ -187,6 +198,7 @@ int Listener::accept_one(Peer& peer) {
   if (fd < 0) return -1;
   peer = Peer{};
   peer.unix_socket = unix_;
+  peer.loopback_listener = loopback_;
   if (unix_) {
     ucred cred{};
     socklen_t clen = sizeof cred;

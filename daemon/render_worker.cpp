@@ -1,5 +1,7 @@
 #include "daemon/render_worker.h"
 
+#include <filesystem>
+
 #include <tbb/parallel_for.h>
 
 #include <chrono>
@@ -105,7 +107,19 @@ void RenderWorker::run() {
 
     std::shared_ptr<const FilmSnapshot> resume = spec_.resume;
     if (!resume) {
-      if (auto ck = read_checkpoint(spec_.paths.checkpoint())) {
+      std::optional<FilmSnapshot> ck;
+      try {
+        ck = read_checkpoint(spec_.paths.checkpoint());
+      } catch (const std::exception& e) {
+        // A corrupt checkpoint loses only the work since the start: samples depend on (seed,
+        // pixel, index) alone, so rendering again from 0 spp gives the same image. Keep the file
+        // for inspection.
+        std::error_code ec;
+        std::filesystem::rename(spec_.paths.checkpoint(), spec_.paths.checkpoint() + ".corrupt", ec);
+        log_.error("job {}: corrupt checkpoint ({}); moved to checkpoint.bin.corrupt, rendering again from 0 spp",
+                   spec_.job, e.what());
+      }
+      if (ck) {
         resume = std::make_shared<const FilmSnapshot>(std::move(*ck));
         last_on_disk = true;
       }

@@ -4,6 +4,7 @@
 #include <sys/epoll.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <csignal>
 #include <filesystem>
 
@@ -44,20 +45,33 @@ void Server::start() {
   store_ = std::make_unique<JobStore>(cfg_.state_dir + "/jobs.sqlite");
   assets_ = std::make_unique<AssetCache>(cfg_.state_dir + "/assets");
   recover_jobs();
+  if (!cfg_.tls_cert.empty()) tls_ = std::make_unique<TlsContext>(cfg_.tls_cert, cfg_.tls_key);
   open_listeners();
 
+  loop_.set_error_handler([this](const std::exception& e) {
+    log_.error("loop: {}; carrying on (the request or event that hit it was not completed)", e.what());
+  });
   loop_.add(signals_.fd(), EPOLLIN, [this](std::uint32_t) { on_signal(); });
   if (double wd = watchdog_interval_s(); wd > 0) {
     log_.info("systemd watchdog: pinging every {:.1f} s", wd);
     loop_.add_timer(wd, [this, wd] { watchdog_tick(wd); });
   }
+  loop_.add_timer(1.0, [this] { sweep_timeouts(); });
   std::string where;
   for (const auto& l : listeners_) where += (where.empty() ? "" : ", ") + l.text();
-  log_.info("omegad ready: listening on {}; state in {}; {} render threads, {} job(s) at once", where,
-            cfg_.state_dir, resolve_threads(cfg_.threads), cfg_.max_running);
+  log_.info("omegad ready: listening on {}{}; state in {}; {} render threads, {} job(s) at once", where,
+            tls_ ? " (TCP over TLS)" : "", cfg_.state_dir, resolve_threads(cfg_.threads), cfg_.max_running);
   notify_ready("listening on " + where);
   reschedule();
 }
+
+namespace {
+std::string refuse_open_tcp(const std::string& where) {
+  return "refusing to listen on " + where +
+         ": it is not a loopback address and TCP authentication is not configured (add tcp_users to the config, "
+         "see docs/security.md)";
+}
+}  // namespace
 
 void Server::open_listeners() {
   std::vector<int> fds = activated_sockets();
@@ -72,9 +86,18 @@ void Server::open_listeners() {
       } catch (const std::invalid_argument& e) {
         throw std::runtime_error(e.what());
       }
+      if (la.kind == ListenAddress::Kind::tcp && !la.loopback && cfg_.tcp_users.empty())
+        throw std::runtime_error(refuse_open_tcp(la.text()));  // before binding it at all
       if (la.kind == ListenAddress::Kind::unix_socket) fs::create_directories(fs::path(la.path).parent_path());
       listeners_.emplace_back(la);
     }
+  }
+  for (const auto& l : listeners_) {
+    if (l.unix_socket()) continue;
+    if (!l.loopback() && cfg_.tcp_users.empty())
+      throw std::runtime_error(refuse_open_tcp(l.text()));
+    if (cfg_.tcp_users.empty())
+      log_.warn("{}: TCP without authentication (no tcp_users): every local user acts as 'tcp'", l.text());
   }
   for (std::size_t i = 0; i < listeners_.size(); ++i)
     loop_.add(listeners_[i].fd(), EPOLLIN, [this, i](std::uint32_t) { on_accept(i); });
@@ -137,7 +160,17 @@ void Server::on_accept(std::size_t li) {
     limits.set_payload_limit(protocol::MessageType::submit, cfg_.max_submit_bytes);
     limits.set_payload_limit(protocol::MessageType::asset, cfg_.max_asset_bytes);
     std::uint64_t id = next_conn_++;
-    auto conn = std::make_unique<Connection>(fd, id, peer, limits, cfg_.output_buffer_bytes);
+    SSL* ssl = nullptr;
+    if (tls_ && !peer.unix_socket) {
+      try {
+        ssl = tls_->wrap(fd);
+      } catch (const std::exception& e) {
+        log_.error("connection from {}: {}", peer.name, e.what());
+        ::close(fd);
+        continue;
+      }
+    }
+    auto conn = std::make_unique<Connection>(fd, id, peer, limits, cfg_.output_buffer_bytes, ssl);
     log_.debug("connection {} from {}", id, peer.name);
     conns_.emplace(id, std::move(conn));
     loop_.add(fd, EPOLLIN | EPOLLRDHUP, [this, id](std::uint32_t ev) { on_connection_event(id, ev); });
@@ -167,7 +200,10 @@ void Server::on_connection_event(std::uint64_t id, std::uint32_t events) {
       }
     }
     if (st == Connection::ReadStatus::error) {
-      if (!c->dead) log_.info("connection {} ({}): read error; closing", id, c->peer().name);
+      if (!c->dead && !c->tls_error().empty())
+        log_.warn("connection {} ({}): TLS failed: {}; closing", id, c->peer().name, c->tls_error());
+      else if (!c->dead)
+        log_.info("connection {} ({}): read error; closing", id, c->peer().name);
       c->dead = true;
     } else if (st == Connection::ReadStatus::eof && !c->dead) {
       log_.debug("connection {} ({}): peer closed", id, c->peer().name);
@@ -186,7 +222,10 @@ void Server::finish_io(Connection& c) {
     c.dead = true;
   }
   if (!c.dead && !c.flush()) {
-    log_.info("connection {} ({}): write failed (peer gone); closing", c.id(), c.peer().name);
+    if (!c.tls_error().empty())
+      log_.warn("connection {} ({}): TLS failed: {}; closing", c.id(), c.peer().name, c.tls_error());
+    else
+      log_.info("connection {} ({}): write failed (peer gone); closing", c.id(), c.peer().name);
     c.dead = true;
   }
   if (!c.dead && c.closing && !c.wants_write()) c.dead = true;
@@ -283,6 +322,34 @@ void Server::maybe_finish_shutdown() {
   log_.info("drained; exiting");
   phase_ = Phase::stopped;
   loop_.stop();
+}
+
+void Server::sweep_timeouts() {
+  const auto now = std::chrono::steady_clock::now();
+  auto secs = [&](std::chrono::steady_clock::time_point t) { return std::chrono::duration<double>(now - t).count(); };
+  std::vector<std::uint64_t> cut;
+  for (auto& [id, c] : conns_) {
+    if (c->dead) continue;
+    if (auto since = c->partial_since(); since && cfg_.frame_timeout_s > 0 && secs(*since) > cfg_.frame_timeout_s) {
+      log_.warn("connection {} ({}): no byte for {:.0f} s inside a frame (frame_timeout_s); closing", id,
+                c->peer().name, secs(*since));
+      reply_error(*c, 0, protocol::ErrorCode::bad_frame, "timeout: the frame was not completed in time");
+      cut.push_back(id);
+    } else if (!c->authenticated && !c->closing && secs(c->opened_at()) > cfg_.handshake_timeout_s) {
+      log_.warn("connection {} ({}): handshake not completed within {} s (handshake_timeout_s); closing", id,
+                c->peer().name, cfg_.handshake_timeout_s);
+      reply_error(*c, 0, protocol::ErrorCode::auth_required, "timeout: hello/auth not completed in time");
+      cut.push_back(id);
+    }
+  }
+  for (auto id : cut) {
+    Connection* c = find(id);
+    c->flush();  // best effort: the error frame, without waiting for a peer that may not read
+    c->dead = true;
+    dirty_.insert(id);
+  }
+  flush_dirty();
+  loop_.add_timer(1.0, [this] { sweep_timeouts(); });
 }
 
 void Server::watchdog_tick(double interval) {

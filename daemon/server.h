@@ -24,6 +24,7 @@
 #include "daemon/render_worker.h"
 #include "daemon/signals.h"
 #include "daemon/tile_publisher.h"
+#include "daemon/tls.h"
 
 namespace omega::daemon {
 
@@ -70,13 +71,19 @@ class Server : public FrameSink {
   void begin_drain(const char* why);
   void maybe_finish_shutdown();
   void watchdog_tick(double interval);
+  void sweep_timeouts();  // every second: stalled half frames, unfinished handshakes
 
   // server_requests.cpp: protocol handlers (loop thread).
   void handle_frame(Connection& c, protocol::DecodedFrame& f);
   void reply_error(Connection& c, std::uint64_t id, protocol::ErrorCode code, const std::string& msg);
-  bool may_modify(const Connection& c, const JobRecord& r) const;
+  // The job's owner, root, the daemon's own uid, or an identity in cfg_.admins.
+  bool may_access(const Connection& c, const JobRecord& r) const;
+  void deny(Connection& c, std::uint64_t id, std::string_view what, const JobRecord& r);
+  bool tcp_auth_required(const Connection& c) const;
+  void on_auth(Connection& c, const protocol::DecodedFrame& f);
   void on_submit(Connection& c, protocol::Submit s);
   void on_asset(Connection& c, protocol::Asset a);
+  void enforce_asset_cache_limit();
   void on_job_request(Connection& c, protocol::MessageType t, std::uint64_t id, std::uint64_t job,
                       std::optional<std::int64_t> priority);
   void on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job);
@@ -110,6 +117,7 @@ class Server : public FrameSink {
   std::unique_ptr<JobStore> store_;
   std::unique_ptr<AssetCache> assets_;
   std::vector<Listener> listeners_;
+  std::unique_ptr<TlsContext> tls_;  // set at start when tls_cert/tls_key are; TCP only
   std::map<std::uint64_t, std::unique_ptr<Connection>> conns_;
   std::set<std::uint64_t> dirty_;  // connections with output to flush at the end of this turn
   std::uint64_t next_conn_ = 1;

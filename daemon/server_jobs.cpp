@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "daemon/scene_limits.h"
 #include "daemon/scheduler.h"
 #include "daemon/server.h"
 #include "integrator/render_session.h"
@@ -22,8 +23,9 @@ void Server::validate(Connection& c, std::uint64_t submit_id) {
   std::string staging = cfg_.state_dir + "/staging/" + std::to_string(::getpid()) + "-" + std::to_string(next_staging_++);
   std::vector<std::string> roots = cfg_.allowed_roots;
   std::uint64_t conn = c.id();
+  const SceneLimits limits{cfg_.max_resolution, cfg_.max_spp, cfg_.max_time_s, cfg_.max_scene_memory_bytes};
   // Background thread: parse, resolve assets and build the scene, so a bad one is refused now.
-  background_.submit([this, conn, s = std::move(s), staging, roots] {
+  background_.submit([this, conn, s = std::move(s), staging, roots, limits] {
     Validation v;
     v.staging = staging;
     try {
@@ -32,7 +34,11 @@ void Server::validate(Connection& c, std::uint64_t submit_id) {
       write_file_atomic(jp.scene(), s.scene);
       for (const auto& a : s.assets) assets_->materialize(a.sha256, a.size, jp.files() + "/" + a.name);
       SceneDesc desc = load_job_scene(jp, s.name, s.integrator.value_or(""), roots);
+      std::uint64_t asset_bytes = 0;
+      for (const auto& a : s.assets) asset_bytes += a.size;
+      check_scene_limits(limits, desc, asset_bytes, scene_file_name(s.name));  // before the costly build
       std::unique_ptr<Scene> scene = Scene::build(desc);
+      check_built_scene_memory(limits, desc, *scene, scene_file_name(s.name));
       RenderSettings rs;
       rs.threads = 1;
       rs.integrator = desc.integrator;
@@ -45,6 +51,8 @@ void Server::validate(Connection& c, std::uint64_t submit_id) {
         v.halt.target_error = h.target_error;
         if (!h.spp && !h.time_s && !h.target_error) v.halt.spp = 64;
       }
+      if (!v.halt.spp && !v.halt.time_s) v.halt.time_s = limits.max_time_s;  // target_error alone: bounded in time
+      check_halt_limits(limits, v.halt, scene_file_name(s.name));
       v.ok = true;
     } catch (const SceneError& e) {
       v.message = e.what();
@@ -99,7 +107,11 @@ void Server::on_validated(std::uint64_t conn, const protocol::Submit& s, Validat
   } catch (const std::exception& e) {
     fs::remove_all(v.staging, ec);
     log_.error("submit '{}': cannot store the job: {}", s.name, e.what());
-    return reply_error(*c, s.id, ErrorCode::internal, std::string("cannot store the job: ") + e.what());
+    const std::string what = e.what();
+    const bool transient = what.find("locked") != std::string::npos || what.find("busy") != std::string::npos ||
+                           what.find("disk") != std::string::npos || what.find("No space") != std::string::npos;
+    return reply_error(*c, s.id, transient ? ErrorCode::busy : ErrorCode::internal,
+                       "cannot store the job: " + what);
   }
   log_.info("job {} accepted from {} (user {}): '{}', priority {}, seed {}", job, c->peer().name, c->user, s.name,
             s.priority, s.seed);

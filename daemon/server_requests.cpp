@@ -5,6 +5,7 @@
 #include <variant>
 
 #include "daemon/server.h"
+#include "daemon/tcp_auth.h"
 #include "film/film.h"
 
 namespace omega::daemon {
@@ -27,10 +28,42 @@ void Server::reply_error(Connection& c, std::uint64_t id, ErrorCode code, const 
   dirty_.insert(c.id());
 }
 
-bool Server::may_modify(const Connection& c, const JobRecord& r) const {
+bool Server::may_access(const Connection& c, const JobRecord& r) const {
   if (c.user == r.owner) return true;
   if (c.peer().uid && (*c.peer().uid == 0 || *c.peer().uid == ::getuid())) return true;  // root and the daemon's user
+  for (const auto& a : cfg_.admins)
+    if (a == c.user) return true;
   return false;
+}
+
+bool Server::tcp_auth_required(const Connection& c) const { return !c.peer().unix_socket && !cfg_.tcp_users.empty(); }
+
+void Server::deny(Connection& c, std::uint64_t id, std::string_view what, const JobRecord& r) {
+  log_.warn("connection {} ({}): {} of job {} denied: it belongs to {}, not {}", c.id(), c.peer().name, what, r.id,
+            r.owner, c.user);
+  reply_error(c, id, ErrorCode::permission_denied,
+              std::string(what) + ": job " + std::to_string(r.id) + " belongs to " + r.owner + ", not " + c.user);
+}
+
+void Server::on_auth(Connection& c, const protocol::DecodedFrame& f) {
+  auto a = protocol::decode<protocol::Auth>(f);
+  if (!a) {
+    reply_error(c, f.id, ErrorCode::bad_request, a.message());
+    c.closing = true;
+    return;
+  }
+  if (!check_auth(cfg_.tcp_users, c.nonce, a->user, a->mac)) {
+    log_.warn("connection {} ({}): authentication failed for user '{}'; closing", c.id(), c.peer().name,
+              a->user.substr(0, 256));
+    reply_error(c, f.id, ErrorCode::auth_failed, "authentication failed: unknown user or wrong token");
+    c.closing = true;
+    return;
+  }
+  c.user = a->user;
+  c.authenticated = true;
+  c.nonce.clear();
+  c.send(protocol::encode(protocol::Ok{f.id}));
+  log_.info("connection {} ({}): authenticated as '{}'", c.id(), c.peer().name, c.user);
 }
 
 void Server::handle_frame(Connection& c, protocol::DecodedFrame& f) {
@@ -62,20 +95,39 @@ void Server::handle_frame(Connection& c, protocol::DecodedFrame& f) {
     w.id = f.id;
     w.version = *v;
     w.server = "omegad/0.1";
-    if (c.peer().unix_socket && c.peer().uid) {
+    if (c.peer().unix_socket) {
+      if (!c.peer().uid) {
+        log_.warn("connection {} ({}): no peer credentials; closing", c.id(), c.peer().name);
+        reply_error(c, f.id, ErrorCode::auth_failed, "cannot read the peer's credentials (SO_PEERCRED)");
+        c.closing = true;
+        return;
+      }
       w.auth = protocol::AuthMethod::peer;
       c.user = std::to_string(*c.peer().uid);
+      w.user = c.user;
+      c.authenticated = true;
+    } else if (tcp_auth_required(c)) {
+      w.auth = protocol::AuthMethod::hmac_sha256;
+      c.nonce = make_nonce();
+      w.nonce = c.nonce;
     } else {
-      w.auth = protocol::AuthMethod::none;  // loopback TCP until HMAC auth lands
+      // Loopback TCP with no tcp_users configured (tests): one anonymous identity, "tcp".
+      w.auth = protocol::AuthMethod::none;
       c.user = "tcp";
+      w.user = c.user;
+      c.authenticated = true;
     }
-    w.user = c.user;
     c.welcomed = true;
     c.send(protocol::encode(w));
     log_.debug("connection {} ({}): hello from '{}', user {}", c.id(), c.peer().name, h->client, c.user);
     return;
   }
 
+  if (!c.authenticated) {
+    if (f.type == MessageType::auth) return on_auth(c, f);
+    log_.warn("connection {} ({}): '{}' before authentication", c.id(), c.peer().name, protocol::to_string(f.type));
+    return reply_error(c, f.id, ErrorCode::auth_required, "authenticate first (auth with the HMAC of the nonce)");
+  }
   auto m = protocol::decode_message(f);
   if (!m) {
     log_.warn("connection {} ({}): bad {} request: {}: {}", c.id(), c.peer().name, protocol::to_string(f.type),
@@ -117,6 +169,8 @@ void Server::handle_frame(Connection& c, protocol::DecodedFrame& f) {
           on_fetch(c, msg.id, msg.job);
         } else if constexpr (std::is_same_v<T, protocol::Hello>) {
           reply_error(c, msg.id, ErrorCode::bad_request, "hello: the session is already open");
+        } else if constexpr (std::is_same_v<T, protocol::Auth>) {
+          reply_error(c, msg.id, ErrorCode::bad_request, "auth: this session is already authenticated");
         } else {
           log_.warn("connection {} ({}): '{}' is not a request", c.id(), c.peer().name, protocol::to_string(f.type));
           reply_error(c, f.id, ErrorCode::bad_request,
@@ -133,6 +187,20 @@ void Server::on_submit(Connection& c, protocol::Submit s) {
     return reply_error(c, s.id, ErrorCode::busy, "too many submits in progress on this connection");
   if (store_->count_unfinished() >= static_cast<std::size_t>(cfg_.max_queued_jobs))
     return reply_error(c, s.id, ErrorCode::busy, "the queue is full (max_queued_jobs)");
+  if (std::size_t n = store_->count_unfinished(c.user) + c.pending.size(); n >= static_cast<std::size_t>(cfg_.max_jobs_per_owner)) {
+    log_.warn("connection {} ({}): submit {} refused: {} has {} unfinished job(s) (max_jobs_per_owner {})", c.id(),
+              c.peer().name, s.id, c.user, n, cfg_.max_jobs_per_owner);
+    return reply_error(c, s.id, ErrorCode::busy,
+                       "user " + c.user + " has " + std::to_string(n) + " unfinished jobs (max_jobs_per_owner " +
+                           std::to_string(cfg_.max_jobs_per_owner) + ")");
+  }
+  if (s.halt.spp && *s.halt.spp > cfg_.max_spp)
+    return reply_error(c, s.id, ErrorCode::bad_request,
+                       "halt.spp " + std::to_string(*s.halt.spp) + " is over this daemon's max_spp (" +
+                           std::to_string(cfg_.max_spp) + ")");
+  if (s.halt.time_s && *s.halt.time_s > cfg_.max_time_s)
+    return reply_error(c, s.id, ErrorCode::bad_request,
+                       fmt::format("halt.time_s {} is over this daemon's max_time_s ({})", *s.halt.time_s, cfg_.max_time_s));
   PendingSubmit p;
   std::map<std::string, std::uint64_t> sizes;
   for (const auto& a : s.assets) {
@@ -189,7 +257,18 @@ void Server::on_asset(Connection& c, protocol::Asset a) {
     return reply_error(c, a.id, ErrorCode::asset_mismatch, problem);
   }
   p.missing.erase(a.sha256);
+  enforce_asset_cache_limit();
   if (p.missing.empty()) validate(c, a.id);
+}
+
+void Server::enforce_asset_cache_limit() {
+  std::set<std::string> keep;  // assets of submits in progress: checked as present, not yet linked
+  for (const auto& [id, conn] : conns_)
+    for (const auto& [sid, p] : conn->pending)
+      for (const auto& a : p.submit.assets) keep.insert(a.sha256);
+  for (const auto& sha : assets_->evict(cfg_.max_asset_cache_bytes, keep))
+    log_.info("asset cache: evicted {} (least recently used, no job needs it; max_asset_cache_bytes {})", sha,
+              cfg_.max_asset_cache_bytes);
 }
 
 void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std::uint64_t job,
@@ -203,9 +282,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
     c.send(protocol::encode(reply));
     return;
   }
-  if (!may_modify(c, *r))
-    return reply_error(c, id, ErrorCode::permission_denied,
-                       "job " + std::to_string(job) + " belongs to " + r->owner + ", not " + c.user);
+  if (!may_access(c, *r)) return deny(c, id, protocol::to_string(t), *r);
   const std::string what(protocol::to_string(t));
   auto bad_state = [&] {
     reply_error(c, id, ErrorCode::invalid_state,
@@ -260,6 +337,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
 void Server::on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job) {
   std::optional<JobRecord> r = store_->get(job);
   if (!r) return reply_error(c, id, ErrorCode::unknown_job, "no job " + std::to_string(job));
+  if (!may_access(c, *r)) return deny(c, id, "subscribe", *r);
   c.send(protocol::encode(protocol::Ok{id}));
   std::shared_ptr<const FilmSnapshot> snap = latest_snapshot(job);
   auto subscribe_now = [this, job, id, conn = c.id()](const JobRecord& rec) {
@@ -319,6 +397,7 @@ void Server::on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job) {
 void Server::on_fetch(Connection& c, std::uint64_t id, std::uint64_t job) {
   std::optional<JobRecord> r = store_->get(job);
   if (!r) return reply_error(c, id, ErrorCode::unknown_job, "no job " + std::to_string(job));
+  if (!may_access(c, *r)) return deny(c, id, "fetch", *r);
   JobPaths jp = paths(job);
   std::shared_ptr<const FilmSnapshot> snap;
   std::error_code ec;

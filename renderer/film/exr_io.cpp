@@ -291,8 +291,46 @@ std::vector<uint8_t> encode_exr_tile(const Film& film, const Rect& rect, const E
     return encode(film, rect, meta);
 }
 
+namespace {
+
+// Walks the EXR header(s) and checks that every attribute's declared size fits in the bytes we
+// hold. OpenEXR (3.1) allocates an attribute's declared size before reading it, so a 30-byte
+// input claiming a 2 GiB string attribute would cost 2 GiB (found by fuzz/fuzz_tile_exr).
+void check_exr_header_sizes(std::span<const uint8_t> b) {
+    auto bad = [](const char* what) { throw std::runtime_error(std::string("invalid EXR header: ") + what); };
+    if (b.size() < 8 || b[0] != 0x76 || b[1] != 0x2f || b[2] != 0x31 || b[3] != 0x01) bad("not an EXR file");
+    const bool multipart = (b[5] & 0x10) != 0;  // flags bit 12 (0x1000): bytes 4..7 little-endian
+    size_t p = 8;
+    auto cstring = [&](size_t max_len) {
+        size_t start = p;
+        while (p < b.size() && b[p] != 0) {
+            if (p - start >= max_len) bad("name too long");
+            ++p;
+        }
+        if (p >= b.size()) bad("truncated");
+        return p++ - start;  // length, and skip the NUL
+    };
+    for (int headers = 0;; ++headers) {
+        if (headers > 1024) bad("too many parts");
+        for (int attrs = 0;; ++attrs) {
+            if (attrs > 100000) bad("too many attributes");
+            if (cstring(255) == 0) break;  // end of this header
+            if (cstring(255) == 0) bad("empty attribute type");
+            if (b.size() - p < 4) bad("truncated");
+            const uint32_t size = uint32_t(b[p]) | uint32_t(b[p + 1]) << 8 | uint32_t(b[p + 2]) << 16 | uint32_t(b[p + 3]) << 24;
+            p += 4;
+            if (size > b.size() - p) bad("an attribute is larger than the file");
+            p += size;
+        }
+        if (!multipart || p >= b.size() || b[p] == 0) return;
+    }
+}
+
+}  // namespace
+
 ExrImage decode_exr_memory(std::span<const uint8_t> bytes, long long max_pixels) {
     try {
+        check_exr_header_sizes(bytes);
         // OpenEXR's fuzz-tested validator: it reads the data through every API with memory
         // limits, so inputs that could drive the decoders into trouble are turned away first.
         if (Imf::checkOpenEXRFile(reinterpret_cast<const char*>(bytes.data()), bytes.size(), true, true, true))
