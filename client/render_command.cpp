@@ -21,14 +21,6 @@ namespace omega {
 
 namespace {
 
-const char* integrator_name(IntegratorType t) {
-    switch (t) {
-        case IntegratorType::Path: return "path";
-        case IntegratorType::Light: return "light";
-        case IntegratorType::Bdpt: return "bdpt";
-    }
-    return "?";
-}
 
 std::string default_output(const std::string& scene) {
     return std::filesystem::path(scene).stem().string() + ".exr";

@@ -147,9 +147,6 @@ void RenderWorker::run() {
     bool time_done = h.time_s && resume && resume->elapsed_s >= *h.time_s;
     if (time_done) rs.halt.spp = static_cast<long long>(resume->spp);  // nothing left to render
 
-    const std::string integrator_name = desc.integrator.type == IntegratorType::Path    ? "path"
-                                        : desc.integrator.type == IntegratorType::Light ? "light"
-                                                                                        : "bdpt";
     RenderSession session(*scene, rs);
     if (resume) session.film() = Film::deserialize(desc.sensor.film, resume->film);
     {
@@ -169,7 +166,7 @@ void RenderWorker::run() {
       snap->nonfinite = base_nonfinite + r.nonfinite;
       if (std::isfinite(r.error.mean_rel_error)) snap->rel_error = r.error.mean_rel_error;
       snap->film = session.film().serialize();
-      snap->integrator = integrator_name;
+      snap->integrator = integrator_name(desc.integrator.type);
       snap->seed = spec_.seed;
       last = snap;
       last_on_disk = false;
@@ -206,8 +203,7 @@ void RenderWorker::run() {
       ExrMeta m;
       m.spp = static_cast<long long>(meta.spp);
       m.time_s = meta.elapsed_s;
-      m.integrator = desc.integrator.type == IntegratorType::Path ? "path"
-                     : desc.integrator.type == IntegratorType::Light ? "light" : "bdpt";
+      m.integrator = integrator_name(desc.integrator.type);
       m.seed = spec_.seed;
       m.nonfinite = meta.nonfinite;
       m.warnings = desc.warnings;

@@ -375,9 +375,7 @@ void Server::on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job) {
         // A checkpoint restored after a restart does not record which integrator made it.
         SceneDesc d = load_job_scene(jp, rec.name, rec.integrator, roots);
         fd = d.sensor.film;
-        meta.integrator = d.integrator.type == IntegratorType::Path    ? "path"
-                          : d.integrator.type == IntegratorType::Light ? "light"
-                                                                       : "bdpt";
+        meta.integrator = integrator_name(d.integrator.type);
       }
       meta.seed = rec.seed;
       Film f = Film::deserialize(fd, meta.film);

@@ -4,6 +4,9 @@
 // and the film stays a plain per-pixel sample mean (see film.h).
 //
 // All filters are separable: f(x, y) = f1(x) f1(y), each axis drawn from one uniform.
+#include <algorithm>
+#include <cmath>
+
 #include "math/vec.h"
 #include "scene/scene_desc.h"
 
@@ -39,6 +42,20 @@ private:
     // Gaussian: erf(radius / (sigma sqrt 2)), the mass inside the truncation.
     double erf_r_ = 1.0;
 };
+
+// Calls fn(x, y, weight) for every pixel of `crop` whose filter footprint covers film position
+// p, with the filter's density at p (how a light-tracing splat spreads over pixels).
+template <class Rect, class Fn>
+void for_each_filter_pixel(const Filter& filter, const Rect& crop, Vec2 p, Fn&& fn) {
+    const float r = filter.radius();
+    const int xa = std::max(crop.x0, int(std::floor(p.x - r - 0.5f))), xb = std::min(crop.x1 - 1, int(std::ceil(p.x + r - 0.5f)));
+    const int ya = std::max(crop.y0, int(std::floor(p.y - r - 0.5f))), yb = std::min(crop.y1 - 1, int(std::ceil(p.y + r - 0.5f)));
+    for (int y = ya; y <= yb; ++y)
+        for (int x = xa; x <= xb; ++x) {
+            const double f = filter.pdf(double(p.x) - (x + 0.5), double(p.y) - (y + 0.5));
+            if (f > 0) fn(x, y, f);
+        }
+}
 
 // Inverse of std::erf on (-1, 1), accurate to a few ulp in double.
 double erf_inv(double p);

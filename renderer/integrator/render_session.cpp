@@ -54,7 +54,6 @@ void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vec
     std::vector<Vec3d> sums(size_t(crop.area()), Vec3d(0.0));
     auto at = [&](int x, int y) -> Vec3d& { return sums[size_t(y - crop.y0) * size_t(crop.width()) + size_t(x - crop.x0)]; };
     const Filter& filter = film_.filter();
-    const float r = filter.radius();
 
     // Tiles run in waves; each wave's splats are merged in tile order, so the sums are the same
     // for any thread count while memory stays bounded by the wave.
@@ -110,17 +109,10 @@ void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vec
         for (const auto& list : tile_strategy_splats)
             for (const auto& c : list) strategies_->add_splat(c, filter, inv_light_paths_per_sample);
         for (const auto& list : tile_splats)
-            for (const Splat& sp : list) {
-                const int xa = std::max(crop.x0, int(std::floor(sp.film.x - r - 0.5f))),
-                          xb = std::min(crop.x1 - 1, int(std::ceil(sp.film.x + r - 0.5f)));
-                const int ya = std::max(crop.y0, int(std::floor(sp.film.y - r - 0.5f))),
-                          yb = std::min(crop.y1 - 1, int(std::ceil(sp.film.y + r - 0.5f)));
-                for (int y = ya; y <= yb; ++y)
-                    for (int x = xa; x <= xb; ++x) {
-                        double f = filter.pdf(double(sp.film.x) - (x + 0.5), double(sp.film.y) - (y + 0.5));
-                        if (f > 0) at(x, y) += Vec3d(sp.value) * (f * inv_light_paths_per_sample);
-                    }
-            }
+            for (const Splat& sp : list)
+                for_each_filter_pixel(filter, crop, sp.film, [&](int x, int y, double f) {
+                    at(x, y) += Vec3d(sp.value) * (f * inv_light_paths_per_sample);
+                });
     }
     if (aborted()) return;
     const double n = double(s1 - s0);

@@ -35,19 +35,11 @@ void StrategyImages::add_camera(int x, int y, const StrategyContribution& c) {
 void StrategyImages::add_splat(const StrategyContribution& c, const Filter& filter, double scale) {
     int i = index(c.s, c.t);
     if (i < 0) return;
-    const float r = filter.radius();
-    const int xa = std::max(crop_.x0, int(std::floor(c.film.x - r - 0.5f))),
-              xb = std::min(crop_.x1 - 1, int(std::ceil(c.film.x + r - 0.5f)));
-    const int ya = std::max(crop_.y0, int(std::floor(c.film.y - r - 0.5f))),
-              yb = std::min(crop_.y1 - 1, int(std::ceil(c.film.y + r - 0.5f)));
-    for (int y = ya; y <= yb; ++y)
-        for (int x = xa; x <= xb; ++x) {
-            double f = filter.pdf(double(c.film.x) - (x + 0.5), double(c.film.y) - (y + 0.5)) * scale;
-            if (f <= 0) continue;
-            size_t p = size_t(y - crop_.y0) * size_t(crop_.width()) + size_t(x - crop_.x0);
-            weighted_[size_t(i)][p] += Vec3d(c.weighted) * f;
-            unweighted_[size_t(i)][p] += Vec3d(c.unweighted) * f;
-        }
+    for_each_filter_pixel(filter, crop_, c.film, [&](int x, int y, double f) {
+        size_t p = size_t(y - crop_.y0) * size_t(crop_.width()) + size_t(x - crop_.x0);
+        weighted_[size_t(i)][p] += Vec3d(c.weighted) * (f * scale);
+        unweighted_[size_t(i)][p] += Vec3d(c.unweighted) * (f * scale);
+    });
 }
 
 std::vector<ExrMeta::Layer> StrategyImages::layers(long long spp) const {

@@ -22,6 +22,16 @@ struct SourceLoc {
 
 enum class IntegratorType { Path, Light, Bdpt };
 
+// The name used in scene files, on the command line, in the protocol and in EXR headers.
+inline const char* integrator_name(IntegratorType t) {
+    switch (t) {
+        case IntegratorType::Path: return "path";
+        case IntegratorType::Light: return "light";
+        case IntegratorType::Bdpt: return "bdpt";
+    }
+    return "path";
+}
+
 struct IntegratorDesc {
     IntegratorType type = IntegratorType::Path;
     int max_depth = -1;  // edges; -1 = unbounded (Russian roulette ends paths)

@@ -108,7 +108,7 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
     o += "omega: 1\n";
 
     const IntegratorDesc& it = d.integrator;
-    const char* itype = it.type == IntegratorType::Path ? "path" : it.type == IntegratorType::Light ? "light" : "bdpt";
+    const char* itype = integrator_name(it.type);
     o += fmt::format("integrator: {{type: {}, max_depth: {}, rr_depth: {}}}\n", itype, it.max_depth, it.rr_depth);
 
     const SensorDesc& s = d.sensor;
