@@ -4,24 +4,11 @@
 
 #include <cmath>
 
+#include "analytic.h"
 #include "render_harness.h"
 
 namespace omega {
 namespace {
-
-// Form factor from a point to the rectangle [0,a] x [0,b] on a parallel plane at height h,
-// with the point under the corner (0,0). Odd in a and b, so rectangles anywhere follow by
-// inclusion-exclusion.
-double corner_ff(double a, double b, double h) {
-    double A = a / h, B = b / h;
-    double sa = std::sqrt(1 + A * A), sb = std::sqrt(1 + B * B);
-    return (A / sa * std::atan(B / sa) + B / sb * std::atan(A / sb)) / (2 * kPiD);
-}
-
-double rect_ff(double px, double py, double x0, double x1, double y0, double y1, double h) {
-    x0 -= px; x1 -= px; y0 -= py; y1 -= py;
-    return corner_ff(x1, y1, h) - corner_ff(x0, y1, h) - corner_ff(x1, y0, h) + corner_ff(x0, y0, h);
-}
 
 struct FfSetup {
     double lx0 = 0.5, lx1 = 1.5, ly0 = -0.5, ly1 = 0.5, h = 1.0;  // the light
@@ -54,20 +41,11 @@ SceneDesc make_scene(const FfSetup& s, FilterType filter) {
     return d;
 }
 
-// Expected pixel value: the box-filtered radiance, integrated over the pixel by Gauss-Legendre.
+// Expected pixel value: the box-filtered radiance rho * Le * F over the pixel.
 double expected_pixel(const FfSetup& s, int x, int y) {
-    static const double g[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
-    static const double w[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
-    double sum = 0;
-    for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) {
-            double fx = x + 0.5 + 0.5 * g[i], fy = y + 0.5 + 0.5 * g[j];
-            // Camera looks down with +y up: image right is world +x, image top is world +y.
-            double wx = s.cx + (2 * fx / s.res - 1) * s.half;
-            double wy = s.cy + (1 - 2 * fy / s.res) * s.half;
-            sum += w[i] * w[j] * 0.25 * s.rho * s.le * rect_ff(wx, wy, s.lx0, s.lx1, s.ly0, s.ly1, s.h);
-        }
-    return sum;
+    return test::pixel_average(x, y, s.res, s.cx, s.cy, s.half, [&](double wx, double wy) {
+        return double(s.rho) * s.le * test::rect_form_factor(wx, wy, s.lx0, s.lx1, s.ly0, s.ly1, s.h);
+    });
 }
 
 TEST(FormFactor, PlaneUnderRectangularLight) {

@@ -8,6 +8,7 @@
 
 #include <cmath>
 
+#include "analytic.h"
 #include "stability_util.h"
 
 namespace omega {
@@ -45,19 +46,11 @@ SceneDesc tiny_light_scene(const TinySetup& s, double r, IntegratorType type) {
 }
 
 double expected_pixel(const TinySetup& s, int x, int y) {
-    static const double g[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
-    static const double w[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
-    double sum = 0;
-    for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) {
-            double fx = x + 0.5 + 0.5 * g[i], fy = y + 0.5 + 0.5 * g[j];
-            double wx = s.cx + (2 * fx / s.res - 1) * s.half;
-            double wy = s.cy + (1 - 2 * fy / s.res) * s.half;
-            double dx = wx - s.light.x, dy = wy - s.light.y, h = s.light.z;
-            double d = std::sqrt(dx * dx + dy * dy + h * h);
-            sum += w[i] * w[j] * 0.25 * double(s.rho) * s.c * h / (d * d * d);
-        }
-    return sum;
+    return test::pixel_average(x, y, s.res, s.cx, s.cy, s.half, [&](double wx, double wy) {
+        double dx = wx - s.light.x, dy = wy - s.light.y, h = s.light.z;
+        double d = std::sqrt(dx * dx + dy * dy + h * h);
+        return double(s.rho) * s.c * h / (d * d * d);
+    });
 }
 
 const double kRadii[] = {1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6};
