@@ -85,7 +85,9 @@ Filter::Filter(FilterType type, float radius, float gaussian_stddev) : type_(typ
 
 double Filter::pdf_1d(double x) const {
     const double r = radius_;
-    if (std::abs(x) > r) return 0.0;
+    // Half-open support [-r, r): a splat exactly on the border between two pixels (a focused
+    // point on a pixel corner, say) must land in one of them, not in both.
+    if (x < -r || x >= r) return 0.0;
     switch (type_) {
         case FilterType::Box: return 0.5 / r;
         case FilterType::Tent: return (r - std::abs(x)) / (r * r);

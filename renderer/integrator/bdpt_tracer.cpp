@@ -9,6 +9,10 @@ BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
     camera_limits_ = {desc.type == IntegratorType::Light ? 0 : md + 1, desc.rr_depth + 1};
     // Without a D surface the light subpath is only needed for its endpoint (s = 1, t = 1).
     light_limits_ = {desc.type == IntegratorType::Path ? 0 : (plan_.light_subpaths ? md : 1), desc.rr_depth};
+    // t = 0 (s = k light vertices, then the lens): the walk's last vertex must still scatter
+    // towards the lens, so it goes one vertex further; longer connections are skipped by k.
+    use_t0_ = plan_.t0 && set_.allows(2, 0);
+    if (use_t0_ && md < kMaxUnboundedDepth) light_limits_.max_vertices = md + 1;
 }
 
 Rgb BdptTracer::sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
@@ -16,10 +20,23 @@ Rgb BdptTracer::sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch
     auto& cam = scratch.camera;
     auto& lit = scratch.light;
     const int n_cam = camera_limits_.max_vertices > 0 ? generate_camera_subpath(scene_, ray, camera_limits_, rng, stats, cam) : 0;
-    const int n_light = light_limits_.max_vertices > 0 ? generate_light_subpath(scene_, light_limits_, rng, stats, lit) : 0;
+    const int n_light = light_limits_.max_vertices > 0
+                            ? generate_light_subpath(scene_, light_limits_, rng, stats, lit, use_t0_ ? &scratch.lens : nullptr)
+                            : 0;
     if (n_light == 0) lit.clear();
 
     Rgb L(0.f);
+    if (use_t0_) {
+        for (const LensCrossing& lc : scratch.lens) {
+            if (max_depth_ >= 0 && lc.s > max_depth_) continue;  // k = s edges
+            auto c = connect_lens(scene_, lit, lc, set_, scratch.connect);
+            if (!c) continue;
+            Rgb unweighted = c->L * float(c->importance);
+            Rgb weighted = unweighted * float(c->weight);
+            if (per_strategy) per_strategy->push_back({lc.s + 1, 0, unweighted, weighted, true, c->film});
+            splats.push_back({c->film, weighted});
+        }
+    }
     // t = 1 needs no camera subpath; s = 1 samples its light vertex afresh (next-event estimation).
     const int t_max = std::max(n_cam, 1);
     for (int t = 1; t <= t_max; ++t) {

@@ -20,6 +20,7 @@ struct Splat {
 // Scratch owned by one worker thread.
 struct BdptScratch {
     std::vector<PathVertex> camera, light;
+    std::vector<LensCrossing> lens;  // t = 0
     ConnectStats connect;
 };
 
@@ -35,7 +36,7 @@ public:
     // Concurrency: const after construction; sample() may run on any number of threads.
     BdptTracer(const Scene& scene, const IntegratorDesc& desc);
     // One sample for the pixel whose camera ray is `ray`. Returns the camera-side contribution
-    // (strategies t >= 2) and appends the light-tracing splats (t = 1). If `per_strategy` is
+    // (strategies t >= 2) and appends the splats (t = 1, and t = 0 for a hittable lens). If `per_strategy` is
     // given, every strategy's contribution is also recorded there.
     Rgb sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
                std::vector<StrategyContribution>* per_strategy = nullptr) const;
@@ -48,6 +49,7 @@ private:
     StrategySet set_;
     StrategyPlan plan_;  // strategies that cannot contribute in this scene are never run
     int max_depth_;
+    bool use_t0_ = false;  // light subpaths that hit the lens are a strategy here
     WalkLimits camera_limits_, light_limits_;
 };
 

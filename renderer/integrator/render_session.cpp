@@ -41,7 +41,8 @@ RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
     if (settings.integrator.type != IntegratorType::Path) {
         bdpt_ = std::make_unique<BdptTracer>(scene, settings.integrator);
         if (settings.strategy_images_max_k > 0)
-            strategies_ = std::make_unique<StrategyImages>(film_.crop(), settings.strategy_images_max_k);
+            strategies_ = std::make_unique<StrategyImages>(film_.crop(), settings.strategy_images_max_k,
+                                                           bdpt_->plan().t0 && bdpt_->strategies().allows(2, 0));
     }
 }
 

@@ -7,9 +7,10 @@
 
 namespace omega {
 
-StrategyImages::StrategyImages(const Rect& crop, int max_k) : crop_(crop), max_k_(max_k) {
+StrategyImages::StrategyImages(const Rect& crop, int max_k, bool with_t0)
+    : crop_(crop), max_k_(max_k), with_t0_(with_t0) {
     for (int k = 1; k <= max_k; ++k)
-        for (int s = 0; s <= k; ++s) strategies_.push_back({s, k + 1 - s});  // t >= 1
+        for (int s = 0; s <= k + (with_t0 ? 1 : 0); ++s) strategies_.push_back({s, k + 1 - s});
     const size_t n = size_t(crop.area());
     weighted_.assign(strategies_.size(), std::vector<Vec3d>(n, Vec3d(0.0)));
     unweighted_.assign(strategies_.size(), std::vector<Vec3d>(n, Vec3d(0.0)));
@@ -17,10 +18,10 @@ StrategyImages::StrategyImages(const Rect& crop, int max_k) : crop_(crop), max_k
 
 int StrategyImages::index(int s, int t) const {
     const int k = s + t - 1;
-    if (k < 1 || k > max_k_ || t < 1) return -1;
-    // Strategies of length k start after those of lengths 1..k-1 (k + 1 each... 2, 3, ...).
+    if (k < 1 || k > max_k_ || t < (with_t0_ ? 0 : 1)) return -1;
+    // Strategies of length k start after those of lengths 1..k-1 (j + 1 each, j + 2 with t = 0).
     int base = 0;
-    for (int j = 1; j < k; ++j) base += j + 1;
+    for (int j = 1; j < k; ++j) base += j + (with_t0_ ? 2 : 1);
     return base + s;
 }
 

@@ -16,7 +16,8 @@ namespace omega {
 
 class StrategyImages {
 public:
-    StrategyImages(const Rect& crop, int max_k);
+    // with_t0: also the strategies t = 0 (light subpaths hitting a lens of finite aperture).
+    StrategyImages(const Rect& crop, int max_k, bool with_t0 = false);
     int max_k() const { return max_k_; }
     void add_camera(int x, int y, const StrategyContribution& c);
     // `scale` turns one light path's splat into its share of a pixel (1 / crop pixels).
@@ -30,6 +31,7 @@ private:
     int index(int s, int t) const;  // -1 if not recorded
     Rect crop_;
     int max_k_;
+    bool with_t0_;
     std::vector<std::pair<int, int>> strategies_;
     std::vector<std::vector<Vec3d>> weighted_, unweighted_;
 };

@@ -64,10 +64,12 @@ bool sampleable_by(const PathClass& c, IntegratorType integrator) {
     const bool t1 = n >= 1 ? v[n - 1] == 'D' : (c.light.direction == 'D' && c.sensor.direction == 'D');
     // s >= 2, t >= 2: an edge between two D surface vertices.
     const bool inner = v.find("DD") != std::string::npos;
+    // t = 0: the light subpath hits a lens of finite aperture (D D E), whatever came before.
+    const bool t0 = c.sensor.direction == 'D' && c.sensor.position == 'D';
     switch (integrator) {
         case IntegratorType::Path: return s0 || s1;
         case IntegratorType::Light: return t1;
-        case IntegratorType::Bdpt: return s0 || s1 || t1 || inner;
+        case IntegratorType::Bdpt: return s0 || s1 || t1 || inner || t0;
     }
     return false;
 }
@@ -170,10 +172,9 @@ std::vector<std::string> path_space_warnings(const Scene& scene, IntegratorType 
             else if (sampleable_by(c, IntegratorType::Bdpt))
                 out.push_back(fmt::format("{} ({}): missing, {} cannot sample these paths (bdpt can)", c.regex(), what,
                                           integrator_words(integrator)));
-            else
-                out.push_back(fmt::format("{} ({}): missing, only light subpaths that hit the lens (t = 0) could "
-                                          "sample these paths and this renderer has no such strategy",
-                                          c.regex(), what));
+            else  // cannot happen: bdpt runs every local strategy, t = 0 included
+                out.push_back(fmt::format("{} ({}): missing, {} cannot sample these paths", c.regex(), what,
+                                          integrator_words(integrator)));
             if (out.size() >= 6) return out;
         }
     }
@@ -186,7 +187,8 @@ StrategyPlan plan_strategies(const Scene& scene) {
     p.s0 = sc.any_light_hittable;
     // Every connection ends at a D surface vertex; without one only s = 0 remains.
     p.connections = sc.has_diffuse;
-    p.light_subpaths = sc.has_diffuse;
+    p.t0 = scene.sensor().lens_hittable();
+    p.light_subpaths = sc.has_diffuse || p.t0;
     return p;
 }
 

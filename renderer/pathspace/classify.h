@@ -57,7 +57,9 @@ struct StrategyPlan {
     bool s0 = true;             // camera subpaths hitting lights
     bool connections = true;    // strategies with s >= 1 that end an edge at a surface (need a D surface);
                                 // (s, t) = (1, 1), a light endpoint joined to the sensor, always stays
-    bool light_subpaths = true; // walks beyond the light endpoint (s >= 2 or t = 1 need a D surface)
+    bool light_subpaths = true; // walks beyond the light endpoint (s >= 2 or t = 1 need a D surface;
+                                // t = 0 needs none)
+    bool t0 = false;            // light subpaths hitting the lens (a thin lens of finite aperture)
 };
 StrategyPlan plan_strategies(const Scene& scene);
 

@@ -46,7 +46,9 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
     fp.p_light.resize(size_t(n));
     fp.p_sensor.resize(size_t(n));
     fp.delta.assign(size_t(n), 0);
+    // t = 0: the light side's last vertex is the lens (sampled_sensor, or light[s-1] itself).
     auto V = [&](int i) -> const PathVertex& {
+        if (t == 0 && i == n - 1 && sampled_sensor) return *sampled_sensor;
         if (i < s) return (i == 0 && sampled_light) ? *sampled_light : light[size_t(i)];
         int j = t - 1 - (i - s);
         return (j == 0 && sampled_sensor) ? *sampled_sensor : camera[size_t(j)];
@@ -65,7 +67,9 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
     const Light& light0 = scene.lights()[size_t(v0.light)];
     fp.light_hittable = !light_is_delta(light0);
     fp.light_at_infinity = v0.infinite;
+    fp.sensor_hittable = scene.sensor().lens_hittable();
     fp.p_light[0] = light_origin_density(scene, v0);
+    auto through = [](const PathVertex& v, double pdf_area) { return v.delta ? 1.0 : pdf_area; };
 
     // Densities across the connecting edge v_{s-1} -- v_s and one step beyond, which neither
     // subpath could know when it was generated.
@@ -74,7 +78,6 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
         const PathVertex& b = V(s);      // sensor side
         // A density taken through a delta vertex is the discrete 1, as the walks record it. Only
         // impossible strategies connect there, but every split must yield the same table.
-        auto through = [](const PathVertex& v, double pdf_area) { return v.delta ? 1.0 : pdf_area; };
         // p_sensor[s-1]: b generating a.
         if (t == 1) fp.p_sensor[size_t(s - 1)] = sensor_density_at(scene, b, a);
         else fp.p_sensor[size_t(s - 1)] = through(b, to_area_density(b, vertex_pdf_sa(b, b.wo, direction(b, a)), a));
@@ -91,12 +94,46 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
             const PathVertex& b2 = V(s + 1);
             fp.p_light[size_t(s + 1)] = through(b, to_area_density(b, vertex_pdf_sa(b, direction(b, a), direction(b, b2)), b2));
         }
+    } else if (t == 0 && n >= 2) {
+        // The light subpath hit the lens b = v_k: the sensor side's densities at the end of the
+        // path, which the light walk could not know (as for s = 0 at the other end).
+        const PathVertex& b = V(n - 1);
+        const PathVertex& a = V(n - 2);
+        fp.p_sensor[size_t(n - 1)] = scene.sensor().pdf_we(b.p(), direction(b, a)).pos;
+        fp.p_sensor[size_t(n - 2)] = sensor_density_at(scene, b, a);
+        if (n >= 3) {
+            const PathVertex& a2 = V(n - 3);
+            fp.p_sensor[size_t(n - 3)] = through(a, to_area_density(a, vertex_pdf_sa(a, direction(a, b), direction(a, a2)), a2));
+        }
     } else if (s == 0) {
         // The sensor subpath hit the light: v0 = camera[t-1]. The light side generates v1 by emission.
         if (t >= 2) fp.p_light[1] = emission_density_at(scene, v0, V(1));
     }
     // A light that cannot be hit has no density from the sensor side.
     if (!fp.light_hittable) fp.p_sensor[0] = 0;
+}
+
+std::optional<Connection> connect_lens(const Scene& scene, const std::vector<PathVertex>& light,
+                                       const LensCrossing& lc, const StrategySet& set, ConnectStats& cstats,
+                                       FullPathPdfs* pdfs) {
+    const int s = lc.s + 1;  // the lens counts as the light side's last vertex
+    if (!set.allows(s, 0) || lc.s < 1) return std::nullopt;
+    Connection c;
+    c.L = lc.beta;  // times W_e, applied per pixel through `importance` like a t = 1 splat
+    if (is_black(c.L)) return std::nullopt;
+    FullPathPdfs& fp = cstats.table;
+    full_path_pdfs_into(scene, light, {}, s, 0, nullptr, &lc.lens, fp);
+    double w = mis_weight(fp, s, set);
+    if (w < 0) {
+        ++cstats.bad_weights;
+        return std::nullopt;
+    }
+    c.weight = w;
+    c.splat = true;
+    c.film = lc.film;
+    c.importance = lc.importance;
+    if (pdfs) *pdfs = fp;
+    return c;
 }
 
 std::optional<Connection> connect(const Scene& scene, const std::vector<PathVertex>& light,
@@ -126,8 +163,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         const Sensor& sensor = scene.sensor();
         auto sc = sensor.sample_wi(y.p(), {rng.next_1d(), rng.next_1d()});
         if (!sc) return std::nullopt;
-        sampled.kind = VertexKind::Sensor;
-        sampled.hit.p = sc->p;
+        sampled = sensor_vertex(scene, sc->p);
         Sensor::Pdf pdf = sensor.pdf_we(sc->p, -sc->wi);
         sampled.pdf_fwd = sensor.delta_direction() ? 1.0 : pdf.pos;
         sampled_sensor = &sampled;

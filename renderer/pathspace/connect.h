@@ -33,8 +33,15 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
                                   Rng& rng, TracerStats& stats, ConnectStats& cstats,
                                   std::vector<PathVertex>* full_path = nullptr, FullPathPdfs* pdfs = nullptr);
 
+// Strategy t = 0: the light subpath light[0..lc.s) that reached the lens. The contribution is a
+// splat, like t = 1 (no shadow ray: the walk's own edge reached the lens unoccluded).
+std::optional<Connection> connect_lens(const Scene& scene, const std::vector<PathVertex>& light,
+                                       const LensCrossing& lc, const StrategySet& set, ConnectStats& cstats,
+                                       FullPathPdfs* pdfs = nullptr);
+
 // Builds the densities of the full path light[0..s) + reverse(camera[0..t)), with sampled_light
-// standing in for light[0] (s = 1) and sampled_sensor for camera[0] (t = 1) when the connection
+// standing in for light[0] (s = 1) and sampled_sensor for camera[0] (t = 1) or for the lens vertex
+// ending the light side (t = 0; without it, light[s-1] is the lens) when the connection
 // sampled that endpoint afresh.
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,

@@ -7,7 +7,8 @@ namespace omega {
 bool strategy_possible(const FullPathPdfs& path, int s) {
     const int k = path.k();
     const int t = k + 1 - s;
-    if (s < 0 || t < 1) return false;
+    if (s < 0 || t < 0) return false;
+    if (t == 0) return path.sensor_hittable;
     if (s == 0) return path.light_hittable;
     // Light tracing never joins a vertex at infinity to the sensor (connect() refuses it), so the
     // path k = 1 from the environment straight into the lens has no s = 1 strategy.

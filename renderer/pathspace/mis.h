@@ -21,6 +21,7 @@ struct FullPathPdfs {
     std::vector<uint8_t> delta;  // v_i is S: no strategy can connect an edge at it
     bool light_hittable = true;  // s = 0: the light can be hit by a sensor subpath (not delta in position or direction)
     bool light_at_infinity = false;  // v_0 is at infinity: s = 1, t = 1 cannot connect it to the sensor
+    bool sensor_hittable = false;    // t = 0: light subpaths can hit the sensor (a lens of finite aperture)
     int k() const { return int(p_light.size()) - 1; }
 };
 
@@ -37,8 +38,8 @@ struct StrategySet {
     }
 };
 
-// Can strategy s produce this path at all (ignoring the integrator)? t = 0 never: the lens is
-// not part of the scene.
+// Can strategy s produce this path at all (ignoring the integrator)? t = 0 only when the lens
+// has a finite aperture that light subpaths can hit.
 bool strategy_possible(const FullPathPdfs& path, int s);
 
 // Power-heuristic weight of strategy s. Returns a negative value if the computation is not

@@ -47,6 +47,7 @@ double weight_for_split(const Scene& scene, const std::vector<PathVertex>& v, in
 
 struct Checked {
     int paths = 0;
+    int t0_paths = 0;  // sampled by t = 0
     int max_vertices = 0;
 };
 
@@ -63,26 +64,41 @@ Checked check_scene(const SceneDesc& desc, int samples, int max_depth) {
         Vec2 film{rng.next_1d() * float(sensor.width), rng.next_1d() * float(sensor.height)};
         Ray ray = sensor.generate_ray(film, {rng.next_1d(), rng.next_1d()});
         std::vector<PathVertex> cam, lit;
+        std::vector<LensCrossing> lens;
         int nc = generate_camera_subpath(*scene, ray, cam_lim, rng, stats, cam);
-        int nl = generate_light_subpath(*scene, light_lim, rng, stats, lit);
-        for (int t = 1; t <= std::max(nc, 1); ++t)
-            for (int s = 0; s <= std::max(nl, 1); ++s) {
-                int k = s + t - 1;
-                if (k < 1 || k > max_depth || (t >= 2 && t > nc) || (s >= 2 && s > nl) || (t == 1 && s > nl)) continue;
-                if (s == 0 && cam[size_t(t - 1)].light < 0) continue;
+        int nl = generate_light_subpath(*scene, light_lim, rng, stats, lit, &lens);
+        // t = 0 strategies appear as s = -1 - (index of the lens crossing).
+        for (int t = 0; t <= std::max(nc, 1); ++t)
+            for (int s = (t == 0 ? -int(lens.size()) : 0); s <= (t == 0 ? -1 : std::max(nl, 1)); ++s) {
+                const LensCrossing* lc = t == 0 ? &lens[size_t(-1 - s)] : nullptr;
+                const int s_eff = lc ? lc->s + 1 : s;
+                int k = s_eff + t - 1;
+                if (k < 1 || k > max_depth) continue;
+                if (!lc && ((t >= 2 && t > nc) || (s >= 2 && s > nl) || (t == 1 && s > nl))) continue;
+                if (!lc && s == 0 && cam[size_t(t - 1)].light < 0) continue;
                 std::vector<PathVertex> full;
                 FullPathPdfs fp;
                 for (IntegratorType type : {IntegratorType::Bdpt, IntegratorType::Path, IntegratorType::Light}) {
                     StrategySet set{type};
-                    if (!set.allows(s, t)) continue;
-                    auto c = connect(*scene, lit, cam, s, t, set, rng, stats, cstats, &full, &fp);
+                    if (!set.allows(s_eff, t)) continue;
+                    std::optional<Connection> c;
+                    if (lc) {
+                        c = connect_lens(*scene, lit, *lc, set, cstats, &fp);
+                        full.assign(lit.begin(), lit.begin() + lc->s);
+                        full.push_back(lc->lens);
+                    } else {
+                        c = connect(*scene, lit, cam, s, t, set, rng, stats, cstats, &full, &fp);
+                    }
                     if (!c) continue;
+                    if (lc) ++out.t0_paths;
                     EXPECT_TRUE(std::isfinite(c->weight) && c->weight >= 0 && c->weight <= 1 + 1e-12);
                     double sum = 0;
-                    for (int s2 = 0; s2 < int(full.size()); ++s2) {
+                    // s2 = full.size() is t = 0: the light subpath reaching the lens.
+                    for (int s2 = 0; s2 <= int(full.size()); ++s2) {
+                        if (s2 == int(full.size()) && !fp.sensor_hittable) continue;  // no t = 0 table to compare
                         FullPathPdfs t2 = fp;
                         double w = weight_for_split(*scene, full, s2, set, &t2);
-                        if (s2 == s) {
+                        if (s2 == s_eff) {
                             EXPECT_NEAR(w, c->weight, 1e-9);
                         }
                         // Densities recomputed from any split agree with those of the sampled split.
@@ -101,7 +117,7 @@ Checked check_scene(const SceneDesc& desc, int samples, int max_depth) {
                         for (size_t q = 0; q < full.size(); ++q)
                             m += "\n v" + std::to_string(q) + " pL=" + std::to_string(fp.p_light[q]) +
                                  " pE=" + std::to_string(fp.p_sensor[q]) + " delta=" + std::to_string(fp.delta[q]);
-                        for (int s2 = 0; s2 < int(full.size()); ++s2) {
+                        for (int s2 = 0; s2 <= int(full.size()); ++s2) {
                             FullPathPdfs t2 = fp;
                             m += "\n w(" + std::to_string(s2) + ")=" + std::to_string(weight_for_split(*scene, full, s2, set, &t2));
                         }
@@ -228,6 +244,24 @@ TEST(MisWeights, SumToOneThinLens) {
     d.shapes.push_back(light);
     auto c = check_scene(d, 150, 5);
     EXPECT_GT(c.paths, 500);
+}
+
+// t = 0 where it is the only strategy: a point light seen in a mirror through a thin lens
+// (L S D S D D E), next to diffuse paths that every strategy shares. The lens is large so that
+// light subpaths hit it often.
+TEST(MisWeights, SumToOneThinLensPointLightMirrors) {
+    SceneDesc d = box("mirror", "white");
+    d.sensor.type = SensorType::ThinLens;
+    d.sensor.aperture_radius = 0.3f;
+    d.sensor.focus_distance = 1.0f;
+    LightDesc l;
+    l.type = LightType::Point;
+    l.position = {0.2, 0.5, 0.3};
+    l.intensity = Rgb(2.f);
+    d.lights.push_back(l);
+    auto c = check_scene(d, 1500, 6);
+    EXPECT_GT(c.paths, 500);
+    EXPECT_GT(c.t0_paths, 20);
 }
 
 // Stress: a mirror box with one diffuse wall; paths of 60+ vertices keep finite weights that sum to 1.

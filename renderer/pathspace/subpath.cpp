@@ -37,13 +37,30 @@ double density_towards(const Scene& scene, const std::vector<PathVertex>& path, 
     return to_area_density(cur, vertex_pdf_sa(cur, cur.wo, direction(cur, v)), v);
 }
 
+// A light subpath edge `ray` (up to tmax) that crosses the lens: record the t = 0 path.
+void record_lens_crossing(const Scene& scene, const Ray& ray, float tmax, const Rgb& beta,
+                          const std::vector<PathVertex>& path, std::vector<LensCrossing>& out) {
+    auto h = scene.sensor().intersect_lens(ray, tmax);
+    if (!h) return;
+    LensCrossing c;
+    c.s = int(path.size());
+    c.lens = sensor_vertex(scene, h->p);
+    c.lens.pdf_fwd = density_towards(scene, path, c.lens);
+    c.beta = beta;
+    c.film = h->film;
+    c.importance = h->importance;
+    if (c.lens.pdf_fwd > 0 && !is_black(beta)) out.push_back(c);
+}
+
 int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const WalkLimits& lim, Rng& rng,
-                TracerStats& stats, std::vector<PathVertex>& path) {
+                TracerStats& stats, std::vector<PathVertex>& path, std::vector<LensCrossing>* lens = nullptr) {
     while (int(path.size()) < lim.max_vertices) {
         SurfaceHit hit;
         ++stats.rays;
         const size_t n = path.size();
-        if (!scene.intersect(ray, hit)) {
+        const bool found = scene.intersect(ray, hit);
+        if (lens) record_lens_crossing(scene, ray, found ? hit.t : ray.tmax, beta, path, *lens);
+        if (!found) {
             // A camera subpath that escapes ends on the environment, a vertex at infinity.
             int env = scene.environment_light();
             if (mode == TransportMode::Radiance && env >= 0) {
@@ -167,9 +184,7 @@ int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits
     path.clear();
     if (lim.max_vertices <= 0) return 0;
     const Sensor& sensor = scene.sensor();
-    PathVertex cam;
-    cam.kind = VertexKind::Sensor;
-    cam.hit.p = ray.o;
+    PathVertex cam = sensor_vertex(scene, ray.o);
     Sensor::Pdf pdf = sensor.pdf_we(ray.o, ray.d);
     const bool ortho = sensor.delta_direction();
     // Orthographic: the direction is the delta part; the vertex density is the position's.
@@ -180,9 +195,21 @@ int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits
     return random_walk(scene, ray, Rgb(1.f), TransportMode::Radiance, lim, rng, stats, path);
 }
 
+PathVertex sensor_vertex(const Scene& scene, const Vec3& p) {
+    PathVertex v;
+    v.kind = VertexKind::Sensor;
+    v.hit.p = p;
+    if (scene.sensor().lens_hittable()) v.hit.ng = v.hit.ns = scene.sensor().lens_normal();
+    return v;
+}
+
 int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, TracerStats& stats,
-                           std::vector<PathVertex>& path) {
+                           std::vector<PathVertex>& path, std::vector<LensCrossing>* lens) {
     path.clear();
+    if (lens) {
+        lens->clear();
+        if (!scene.sensor().lens_hittable()) lens = nullptr;
+    }
     const auto& sel = scene.light_selection();
     if (sel.empty() || lim.max_vertices <= 0) return 0;
     float u_sel = rng.next_1d();
@@ -205,7 +232,7 @@ int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, 
     double cos0 = std::holds_alternative<AreaLight>(light) ? absdot(e->origin.ng, e->ray.d) : 1.0;
     Rgb beta = e->Le * float(cos0 / (pmf * e->pdf_pos * e->pdf_dir));
     if (!is_finite(beta) || is_black(beta)) return 1;
-    return random_walk(scene, e->ray, beta, TransportMode::Importance, lim, rng, stats, path);
+    return random_walk(scene, e->ray, beta, TransportMode::Importance, lim, rng, stats, path, lens);
 }
 
 }  // namespace omega

@@ -19,10 +19,26 @@ struct WalkLimits {
 int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits& lim, Rng& rng, TracerStats& stats,
                             std::vector<PathVertex>& path);
 
+// Strategy t = 0: an edge of a light subpath that reaches a lens of finite aperture. The full
+// path is the walk's first `s` vertices followed by `lens` (a Sensor vertex whose pdf_fwd is
+// the walk's area density there); its contribution is beta * W_e, splatted at `film`.
+struct LensCrossing {
+    int s = 0;
+    PathVertex lens;
+    Rgb beta;               // throughput of the walk up to the lens
+    Vec2 film;
+    double importance = 0;  // W_e per unit filter weight
+};
+
 // path[0] is a light vertex chosen by power. Returns the number of vertices (0 if the light
-// emitted nothing along the sampled ray).
+// emitted nothing along the sampled ray). If `lens` is given and the sensor's lens can be hit,
+// every edge that crosses it is appended there (the walk itself goes on unchanged).
 int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, TracerStats& stats,
-                           std::vector<PathVertex>& path);
+                           std::vector<PathVertex>& path, std::vector<LensCrossing>* lens = nullptr);
+
+// The sensor vertex at world point p (camera subpaths, t = 1 and t = 0): a thin lens of finite
+// aperture gets its optical axis as normal, so densities towards it are per unit lens area.
+PathVertex sensor_vertex(const Scene& scene, const Vec3& p);
 
 // Area density at `to` of a direction sampled at `from` with solid-angle density pdf_sa
 // (eq. 8.10); vertices at infinity keep the solid-angle density.

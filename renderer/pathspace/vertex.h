@@ -31,7 +31,9 @@ struct PathVertex {
     double pdf_fwd = 0, pdf_rev = 0;
 
     const Vec3& p() const { return hit.p; }
-    bool is_on_surface() const { return kind == VertexKind::Surface || (kind == VertexKind::Light && !infinite && hit.ng != Vec3{}); }
+    // Has an area measure with a normal: surfaces, area lights, and a thin lens of finite
+    // aperture (its ng is the optical axis). Point lights and pinholes have ng = 0.
+    bool is_on_surface() const { return kind == VertexKind::Surface || (!infinite && hit.ng != Vec3{}); }
     // Can an edge end here? Surfaces with a non-delta lobe, and every endpoint (handled by the
     // endpoint's own sampling: light sampling for s = 1, lens sampling for t = 1).
     bool connectible() const { return !delta; }

@@ -68,6 +68,21 @@ struct Sensor {
     };
     std::optional<Connection> sample_wi(const Vec3& ref, Vec2 u_lens) const;
 
+    // Strategy t = 0 (sensor_lens.cpp): a thin lens of finite aperture is a surface in the scene
+    // that light subpaths can hit. Only such a lens is hittable; pinholes and the orthographic
+    // sensor are delta in position or direction.
+    bool lens_hittable() const;
+    Vec3 lens_normal() const;  // world optical axis: the lens disk's normal, facing the scene
+    struct LensHit {
+        Vec3 p;          // the point on the lens
+        float t = 0;     // ray parameter
+        Vec2 film;       // film position in pixels
+        double importance = 0;  // W_e per unit filter weight: 1 / (A_lens a cos^4 theta)
+    };
+    // Where `r` crosses the lens disk before tmax, travelling into the camera (from the front),
+    // landing near the crop. The lens does not occlude: the ray goes on.
+    std::optional<LensHit> intersect_lens(const Ray& r, float tmax) const;
+
     // The S/D character of the sensor's position and direction (classification, ch. 8.3.2).
     bool delta_position() const;
     bool delta_direction() const;
