@@ -35,6 +35,7 @@ public:
 
 private:
     double sample_1d(double u) const;
+    double pdf_1d_inside(double x) const;  // |x| <= r
 
     FilterType type_;
     float radius_;

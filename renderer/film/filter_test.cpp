@@ -14,8 +14,9 @@ namespace {
 
 using film_test::bin_masses_2d;
 
-// The support is half-open, [-r, r): quadrature nodes on +r take the limit from inside.
-double inside(double x, double r) { return x >= r ? std::nextafter(r, 0.0) : x; }
+// On the support's edge the density is halved (a splat on a pixel border is shared): quadrature
+// nodes on +-r take the limit from inside.
+double inside(double x, double r) { return std::abs(x) >= r ? std::copysign(std::nextafter(r, 0.0), x) : x; }
 using film_test::chi2_test;
 
 // Bins samples of `sampler` on a grid over the filter support and compares with `pdf`.
