@@ -306,7 +306,8 @@ Rgb Importer::texture_average(pugi::xml_node tex, const std::string& key) {
     OIIO::ImageBuf buf(p.string());
     if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) fail(fn, key + ".filename", "cannot read '" + file + "': " + buf.geterror());
     const OIIO::ImageSpec& spec = buf.spec();
-    bool srgb = !raw && (spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::UINT16);
+    const auto native = buf.nativespec().format.basetype;  // spec() says FLOAT after the converting read
+    bool srgb = !raw && (native == OIIO::TypeDesc::UINT8 || native == OIIO::TypeDesc::UINT16);
     int nc = spec.nchannels;
     std::vector<float> px(size_t(spec.width) * size_t(spec.height) * size_t(nc));
     buf.get_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, px.data());

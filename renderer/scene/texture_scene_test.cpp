@@ -127,7 +127,9 @@ shapes:
 )");
     for (const std::string& base : {std::string(), f.dir.path.string()}) {
         std::string yaml = write_scene_yaml(d, base);
-        if (!base.empty()) EXPECT_NE(yaml.find("file: \"textures/wood.png\""), std::string::npos) << yaml;
+        if (!base.empty()) {
+            EXPECT_NE(yaml.find("file: \"textures/wood.png\""), std::string::npos) << yaml;
+        }
         SceneDesc back = parse_scene_string(yaml, (f.dir.path / "back.yaml").string());
         const auto &a = *d.materials.at("wood").reflectance_texture, &b = *back.materials.at("wood").reflectance_texture;
         EXPECT_EQ(a.file, b.file);

@@ -17,18 +17,22 @@ std::shared_ptr<const Image> load_image(const std::string& path, bool raw, const
     auto fail = [&](const std::string& why) -> SceneError {
         return SceneError(fmt::format("{}cannot read texture '{}': {}", where, path, why));
     };
-    OIIO::ImageBuf buf(path);
+    // Colour as stored: without this OIIO premultiplies PNG colour by its alpha.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    OIIO::ImageBuf buf(path, 0, 0, nullptr, &config);
     // Subimage 0, mip level 0, converted to float while reading.
     if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) {
         std::string err = buf.geterror();
         throw fail(err.empty() ? "unknown image format" : err);
     }
     const OIIO::ImageSpec& spec = buf.spec();
+    // The file's own pixel type: spec() already says FLOAT after the converting read.
     const int nc = spec.nchannels;
     if (spec.width <= 0 || spec.height <= 0 || nc <= 0) throw fail("the image is empty");
     if (spec.depth > 1) throw fail("3D images are not textures");
     if (size_t(spec.width) * size_t(spec.height) > (size_t(1) << 28)) throw fail("the image is too large");
-    const auto base = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
+    const auto base = OIIO::TypeDesc::BASETYPE(buf.nativespec().format.basetype);
     const bool is_float = base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::DOUBLE;
     const bool decode_srgb = !raw && !is_float;
 

@@ -3,6 +3,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
 namespace omega::test {
@@ -10,9 +11,11 @@ namespace omega::test {
 namespace {
 
 void write(const std::string& path, int w, int h, int channels, OIIO::TypeDesc type, const void* data) {
+    std::filesystem::create_directories(std::filesystem::path(path).parent_path());
     auto out = OIIO::ImageOutput::create(path);
     if (!out) throw std::runtime_error("no image writer for " + path);
     OIIO::ImageSpec spec(w, h, channels, type);
+    spec.attribute("oiio:UnassociatedAlpha", 1);  // write colour as given, not divided by alpha
     if (!out->open(path, spec) || !out->write_image(type, data) || !out->close())
         throw std::runtime_error("cannot write " + path + ": " + out->geterror());
 }
