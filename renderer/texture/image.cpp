@@ -21,17 +21,25 @@ std::shared_ptr<const Image> load_image(const std::string& path, bool raw, const
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
     OIIO::ImageBuf buf(path, 0, 0, nullptr, &config);
-    // Subimage 0, mip level 0, converted to float while reading.
-    if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) {
+    auto oiio_error = [&] {
         std::string err = buf.geterror();
-        throw fail(err.empty() ? "unknown image format" : err);
+        return fail(err.empty() ? "unknown image format" : err);
+    };
+    // The header first: the size is checked before any pixel is decoded.
+    if (!buf.init_spec(path, 0, 0)) throw oiio_error();
+    {
+        const OIIO::ImageSpec& ns = buf.nativespec();
+        if (ns.width <= 0 || ns.height <= 0 || ns.nchannels <= 0) throw fail("the image is empty");
+        if (ns.depth > 1) throw fail("3D images are not textures");
+        // 12 bytes a texel once decoded: 8192 x 8192 is 800 MB; past that a small PNG could exhaust memory.
+        if (size_t(ns.width) * size_t(ns.height) > (size_t(1) << 26))
+            throw fail(fmt::format("{} x {} texels is larger than 8192 x 8192", ns.width, ns.height));
     }
+    // Subimage 0, mip level 0, converted to float while reading.
+    if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) throw oiio_error();
     const OIIO::ImageSpec& spec = buf.spec();
-    // The file's own pixel type: spec() already says FLOAT after the converting read.
     const int nc = spec.nchannels;
-    if (spec.width <= 0 || spec.height <= 0 || nc <= 0) throw fail("the image is empty");
-    if (spec.depth > 1) throw fail("3D images are not textures");
-    if (size_t(spec.width) * size_t(spec.height) > (size_t(1) << 28)) throw fail("the image is too large");
+    // The file's own pixel type: spec() already says FLOAT after the converting read.
     const auto base = OIIO::TypeDesc::BASETYPE(buf.nativespec().format.basetype);
     const bool is_float = base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::DOUBLE;
     const bool decode_srgb = !raw && !is_float;
