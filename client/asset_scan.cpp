@@ -117,26 +117,36 @@ ScannedScene scan_scene(const std::string& scene_path) {
     YAML::Node shapes = root["shapes"];
     bool rewritten = false;
     std::map<std::string, size_t> by_name;
+    // One `file:` of a mesh shape or a bitmap texture: hashed, and renamed when not a clean relative path.
+    auto take = [&](YAML::Node holder) {
+        if (!holder.IsMap() || !holder["file"] || !holder["file"].IsScalar()) return;
+        const std::string written = holder["file"].as<std::string>();
+        fs::path p(written);
+        if (p.is_relative()) p = dir / p;
+        ScannedAsset a;
+        a.path = p.lexically_normal().string();
+        a.sha256 = sha256_file(a.path, &a.size);
+        if (clean_relative(written)) {
+            a.name = written;
+        } else {
+            a.name = "assets/" + a.sha256.substr(0, 16) + "/" + fs::path(written).filename().string();
+            holder["file"] = a.name;
+            rewritten = true;
+        }
+        if (auto it = by_name.find(a.name); it != by_name.end()) return;  // same file twice
+        by_name[a.name] = s.assets.size();
+        s.assets.push_back(std::move(a));
+    };
+    // Textures: the reflectance of a named or an inline material.
+    auto take_material = [&](YAML::Node m) {
+        if (m.IsMap() && m["reflectance"] && m["reflectance"].IsMap()) take(m["reflectance"]);
+    };
+    if (YAML::Node mats = root["materials"]; mats && mats.IsMap())
+        for (auto it = mats.begin(); it != mats.end(); ++it) take_material(it->second);
     if (shapes && shapes.IsSequence()) {
         for (size_t i = 0; i < shapes.size(); ++i) {
-            YAML::Node shape = shapes[i];
-            if (!shape.IsMap() || !shape["file"] || !shape["file"].IsScalar()) continue;
-            const std::string written = shape["file"].as<std::string>();
-            fs::path p(written);
-            if (p.is_relative()) p = dir / p;
-            ScannedAsset a;
-            a.path = p.lexically_normal().string();
-            a.sha256 = sha256_file(a.path, &a.size);
-            if (clean_relative(written)) {
-                a.name = written;
-            } else {
-                a.name = "assets/" + a.sha256.substr(0, 16) + "/" + fs::path(written).filename().string();
-                shape["file"] = a.name;
-                rewritten = true;
-            }
-            if (auto it = by_name.find(a.name); it != by_name.end()) continue;  // same file twice
-            by_name[a.name] = s.assets.size();
-            s.assets.push_back(std::move(a));
+            take(shapes[i]);
+            if (shapes[i].IsMap() && shapes[i]["material"]) take_material(shapes[i]["material"]);
         }
     }
     if (rewritten) {

@@ -124,12 +124,29 @@ OIIO::ImageBuf film_image(const Film& film) {
     return buf;
 }
 
+// The image's own estimated relative variance (--no-reference): the film's variance of each
+// pixel's mean, relative to the mean squared, averaged over pixels and channels.
+double film_relvar(const Film& film) {
+    Rect c = film.crop();
+    double sum = 0;
+    for (int y = c.y0; y < c.y1; ++y)
+        for (int x = c.x0; x < c.x1; ++x) {
+            PixelStats p = film.pixel(x, y);
+            for (int ch = 0; ch < 3; ++ch) {
+                double d = std::max(std::abs(p.mean[ch]), kRelVarEps);
+                sum += p.var_of_mean[ch] / (d * d);
+            }
+        }
+    return sum / (3.0 * double(c.area()));
+}
+
 struct Sample {
     int run = 0;
     uint64_t seed = 0;
     double target = 0, time_s = 0;
     long long spp = 0;
     ImageError err;
+    double relvar = 0;
 };
 
 struct Summary {
@@ -138,6 +155,7 @@ struct Summary {
     double time = 0, spp = 0;
     double rmse = 0, rmse_sd = 0, relmse = 0, relmse_sd = 0, relmse_min = 0, relmse_max = 0, mape = 0, mape_sd = 0,
            eff = 0, eff_sd = 0, ratio = 0;
+    double relvar = 0, relvar_sd = 0, relvar_min = 0, relvar_max = 0, rv_eff = 0, rv_eff_sd = 0;
 };
 
 std::pair<double, double> mean_sd(const std::vector<double>& v) {
@@ -155,7 +173,7 @@ std::vector<Summary> summarise(const std::vector<Sample>& samples) {
         Summary s;
         s.target = t;
         s.n = int(v.size());
-        std::vector<double> time, spp, rmse, rel, mape, eff, ratio;
+        std::vector<double> time, spp, rmse, rel, mape, eff, ratio, rv, rv_eff;
         for (const Sample* x : v) {
             time.push_back(x->time_s);
             spp.push_back(double(x->spp));
@@ -164,6 +182,8 @@ std::vector<Summary> summarise(const std::vector<Sample>& samples) {
             mape.push_back(x->err.mape);
             eff.push_back(1.0 / (x->err.rmse * x->err.rmse * x->time_s));
             ratio.push_back(x->err.mean_ratio);
+            rv.push_back(x->relvar);
+            rv_eff.push_back(1.0 / (x->relvar * x->time_s));
         }
         s.time = mean_sd(time).first;
         s.spp = mean_sd(spp).first;
@@ -174,6 +194,10 @@ std::vector<Summary> summarise(const std::vector<Sample>& samples) {
         std::tie(s.mape, s.mape_sd) = mean_sd(mape);
         std::tie(s.eff, s.eff_sd) = mean_sd(eff);
         s.ratio = mean_sd(ratio).first;
+        std::tie(s.relvar, s.relvar_sd) = mean_sd(rv);
+        s.relvar_min = *std::min_element(rv.begin(), rv.end());
+        s.relvar_max = *std::max_element(rv.begin(), rv.end());
+        std::tie(s.rv_eff, s.rv_eff_sd) = mean_sd(rv_eff);
         out.push_back(s);
     }
     return out;
@@ -211,12 +235,20 @@ void add_converge_command(CLI::App& app, ConvergeArgs& a) {
     cmd->add_option("--height", a.height, "Override the film height (pixels)")->check(CLI::Range(1, 65536));
     cmd->add_option("--reference-time", a.reference_time_s, "Without --reference: seconds for the reference (default 4 x budget)")
         ->check(CLI::PositiveNumber);
+    cmd->add_flag("--no-reference", a.no_reference,
+                  "No reference: report each image's own estimated relative variance (mean of var / max(mean, 0.1)^2 "
+                  "from the film's per-pixel variance) and fit its slope");
     cmd->add_option("-D,--define", a.defines, "Mitsuba XML scenes: set a <default> variable, name=value (repeatable)");
 }
 
 int run_converge(const ConvergeArgs& a) {
     MitsubaOptions xml;
     if (!parse_defines(a.defines, xml.defines)) return 2;
+    if (a.no_reference && (!a.reference.empty() || a.reference_time_s)) {
+        fmt::print(stderr, "omega converge: --no-reference cannot be combined with --reference or --reference-time\n");
+        return 2;
+    }
+    const bool variance_mode = a.no_reference;
     for (const std::string& i : a.integrators)
         if (i != "path" && i != "bdpt" && i != "light") {
             fmt::print(stderr, "omega converge: unknown integrator '{}' (known: path, bdpt, light)\n", i);
@@ -254,7 +286,14 @@ int run_converge(const ConvergeArgs& a) {
     // ---- the reference
     OIIO::ImageBuf ref;
     std::string ref_note;
-    if (!a.reference.empty()) {
+    if (variance_mode) {
+        ref_note = "none (estimated variance)";
+        fmt::print("mode: variance (no reference). Each checkpoint reports the image's own estimated relative variance, "
+                   "relvar = mean over pixels and channels of var / max(mean, {})^2, from the film's per-pixel variance "
+                   "(the EXR's var.* channels). It measures noise only: bias is invisible to it.\n",
+                   kRelVarEps);
+    } else if (!a.reference.empty()) {
+        fmt::print("mode: reference (error against {})\n", a.reference);
         try {
             ref = read_rgb(a.reference);
         } catch (const std::exception& e) {
@@ -287,6 +326,7 @@ int run_converge(const ConvergeArgs& a) {
         rs.seed = a.seed + 1000003;
         rs.integrator = desc.integrator;
         rs.integrator.type = IntegratorType::Path;
+        fmt::print("mode: reference (rendered: there is no --reference; --no-reference measures variance instead)\n");
         fmt::print("no --reference: rendering one with the path tracer for {:g} s (seed {}). It is independent of the "
                    "runs, so the error measures variance (and the reference's own noise), not bias.\n",
                    t, rs.seed);
@@ -346,15 +386,20 @@ int run_converge(const ConvergeArgs& a) {
                 while (next < times.size() && r.elapsed_s >= times[next]) s.target = times[next++];
                 s.spp = r.spp;
                 s.time_s = r.elapsed_s - overhead;
-                snaps.emplace_back(s, film_image(session->film()));
+                if (variance_mode) s.relvar = film_relvar(session->film());
+                snaps.emplace_back(s, variance_mode ? OIIO::ImageBuf() : film_image(session->film()));
                 overhead += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             });
             for (auto& [s, img] : snaps) {
-                s.err = image_error(img, ref);
+                if (!variance_mode) s.err = image_error(img, ref);
                 samples.push_back(s);
             }
             const Sample& last = samples.back();
-            fmt::print("{} run {}/{} (seed {}): {} spp in {:.2f} s, relMSE {:.5g}, RMSE {:.5g}, mean ratio {:.4f}\n",
+            if (variance_mode)
+                fmt::print("{} run {}/{} (seed {}): {} spp in {:.2f} s, relvar {:.5g}\n", name, run + 1, a.runs, rs.seed,
+                           last.spp, last.time_s, last.relvar);
+            else
+                fmt::print("{} run {}/{} (seed {}): {} spp in {:.2f} s, relMSE {:.5g}, RMSE {:.5g}, mean ratio {:.4f}\n",
                        name, run + 1, a.runs, rs.seed, last.spp, last.time_s, last.err.relmse, last.err.rmse,
                        last.err.mean_ratio);
             std::fflush(stdout);
@@ -365,8 +410,22 @@ int run_converge(const ConvergeArgs& a) {
         res.name = name;
         res.summary = summarise(samples);
         std::vector<double> xs, ys;
-        for (const Summary& s : res.summary) xs.push_back(s.time), ys.push_back(s.relmse);
+        for (const Summary& s : res.summary) xs.push_back(s.time), ys.push_back(variance_mode ? s.relvar : s.relmse);
         res.slope = loglog_slope(xs, ys);
+
+        if (variance_mode) {
+            std::ofstream runs_csv(out_dir / (name + "_runs.csv"));
+            runs_csv << "run,seed,time_target_s,time_s,spp,relvar\n";
+            for (const Sample& s : samples)
+                runs_csv << fmt::format("{},{},{:g},{:.4f},{},{:.6g}\n", s.run, s.seed, s.target, s.time_s, s.spp, s.relvar);
+            std::ofstream csv(out_dir / (name + ".csv"));
+            csv << "time_target_s,runs,time_s,spp,relvar,relvar_sd,relvar_min,relvar_max,efficiency,efficiency_sd\n";
+            for (const Summary& s : res.summary)
+                csv << fmt::format("{:g},{},{:.4f},{:.1f},{:.6g},{:.3g},{:.6g},{:.6g},{:.6g},{:.3g}\n", s.target, s.n, s.time,
+                                   s.spp, s.relvar, s.relvar_sd, s.relvar_min, s.relvar_max, s.rv_eff, s.rv_eff_sd);
+            results.push_back(std::move(res));
+            continue;
+        }
 
         std::ofstream runs_csv(out_dir / (name + "_runs.csv"));
         runs_csv << "run,seed,time_target_s,time_s,spp,rmse,relmse,mape,efficiency,mean_ratio\n";
@@ -386,6 +445,15 @@ int run_converge(const ConvergeArgs& a) {
 
     // ---- summary on stdout
     for (const Result& r : results) {
+        if (variance_mode) {
+            fmt::print("\n{}: estimated relvar (eps {}) vs time, mean over runs (sd), log-log slope {:.3f} (1/t would be -1)\n",
+                       r.name, kRelVarEps, r.slope);
+            fmt::print("  {:>8} {:>9} {:>9} {:>11} {:>10} {:>11}\n", "target_s", "time_s", "spp", "relvar", "sd", "efficiency");
+            for (const Summary& s : r.summary)
+                fmt::print("  {:>8g} {:>9.2f} {:>9.1f} {:>11.5g} {:>10.3g} {:>11.4g}\n", s.target, s.time, s.spp, s.relvar,
+                           s.relvar_sd, s.rv_eff);
+            continue;
+        }
         fmt::print("\n{}: relMSE (eps {}) vs time, mean over runs (sd), log-log slope {:.3f} (1/t would be -1)\n", r.name,
                    kRelMseEps, r.slope);
         fmt::print("  {:>8} {:>9} {:>9} {:>11} {:>10} {:>10} {:>10} {:>11}\n", "target_s", "time_s", "spp", "relMSE", "sd",
@@ -408,19 +476,24 @@ int run_converge(const ConvergeArgs& a) {
         g << "set format x '10^{%L}'\nset format y '10^{%L}'\n";
         g << "set grid xtics ytics mxtics mytics\n";
         g << "set xlabel 'render time (s, log scale)'\n";
-        g << fmt::format("set ylabel 'relMSE  (mean of (x-r)^2/(r^2+{}), log scale)'\n", kRelMseEps);
+        if (variance_mode)
+            g << fmt::format("set ylabel 'estimated relvar  (mean of var/max(x,{})^2, log scale)'\n", kRelVarEps);
+        else
+            g << fmt::format("set ylabel 'relMSE  (mean of (x-r)^2/(r^2+{}), log scale)'\n", kRelMseEps);
         g << "set key top right box opaque\n";
         g << fmt::format("set title {} noenhanced\n",
                          gp_quote(fmt::format("{}: {} run(s) per integrator, reference {}", scene_label(a.scene),
                                               a.runs, fs::path(ref_note).filename().string())));
         const Result& first = results.front();
-        double x0 = first.summary.front().time, y0 = first.summary.front().relmse;
+        double x0 = first.summary.front().time,
+               y0 = variance_mode ? first.summary.front().relvar : first.summary.front().relmse;
         g << fmt::format("ideal(x) = {:.9g} * ({:.9g} / x)\n", y0, x0);
         g << "plot ";
         for (size_t i = 0; i < results.size(); ++i) {
             const Result& r = results[i];
-            g << fmt::format("{} using 3:7:9:10 skip 1 with yerrorlines lw 2 pt 7 title {} noenhanced, \\\n    ",
-                             gp_quote(r.name + ".csv"), gp_quote(fmt::format("{} (slope {:.2f})", r.name, r.slope)));
+            g << fmt::format("{} using {} skip 1 with yerrorlines lw 2 pt 7 title {} noenhanced, \\\n    ",
+                             gp_quote(r.name + ".csv"), variance_mode ? "3:5:7:8" : "3:7:9:10",
+                             gp_quote(fmt::format("{} (slope {:.2f})", r.name, r.slope)));
         }
         g << "ideal(x) with lines dt 2 lc rgb 'gray40' title 'slope -1 (ideal 1/t)'\n";
         g.close();

@@ -1,7 +1,7 @@
 #pragma once
-// `omega converge SCENE [--reference REF.exr] [--integrators path,bdpt,light] [--budget 60] [--runs 3]`:
-// error against a reference at log-spaced render times, per integrator, as CSV files and a
-// log-log PNG plot. See docs/converge.md.
+// `omega converge SCENE [--reference REF.exr | --no-reference] [--integrators path,bdpt,light] [--budget 60] [--runs 3]`:
+// error against a reference (or, with --no-reference, the estimated relative variance) at
+// log-spaced render times, per integrator, as CSV files and a log-log PNG plot. See docs/converge.md.
 // `omega compare IMAGE REF`: the same error measures for one image.
 #include <CLI/CLI.hpp>
 
@@ -22,6 +22,9 @@ struct ConvergeArgs {
     uint64_t seed = 0;
     std::optional<int> width, height;
     std::optional<double> reference_time_s;
+    // No reference at all: each checkpoint reports the image's own estimated relative variance
+    // (from the film's per-pixel variance, the EXR's var.* channels) instead of an error.
+    bool no_reference = false;
     std::vector<std::string> defines;
 };
 
@@ -43,6 +46,9 @@ struct ImageError {
     double mean_ratio = 0;  // mean(x) / mean(r)
 };
 constexpr double kRelMseEps = 0.01;
+// relvar = mean over pixels and channels of var / max(mean, eps)^2. eps = 0.1 puts the
+// denominator on relMSE's scale (r^2 + 0.01), so the two modes read alike for an unbiased render.
+constexpr double kRelVarEps = 0.1;
 
 // Log-spaced checkpoints 1, 2, 4, ... below budget, then budget itself.
 std::vector<double> converge_times(double budget_s);

@@ -87,6 +87,25 @@ TEST(AssetScan, BadSceneIsBadInputWithFileAndLine) {
     }
 }
 
+TEST(AssetScan, BitmapTexturesTravelAsAssets) {
+    TempDir d;
+    d.write("scene/textures/wood.png", "png bytes");
+    d.write("shared/stone.png", "other bytes");
+    const auto scene = d.write("scene/s.yaml", "omega: 1\nmaterials:\n"
+                                               "  wood: {type: diffuse, reflectance: {type: bitmap, file: textures/wood.png}}\n"
+                                               "shapes:\n  - {type: rectangle, material: wood}\n"
+                                               "  - {type: cube, material: {type: diffuse, reflectance: {type: bitmap, "
+                                               "file: ../shared/stone.png}}}\n"
+                                               "  - {type: sphere, material: {type: diffuse, reflectance: {type: bitmap, "
+                                               "file: textures/wood.png}}}\n");
+    ScannedScene s = scan_scene(scene.string());
+    ASSERT_EQ(s.assets.size(), 2u);  // wood.png once, though two materials name it
+    EXPECT_EQ(s.assets[0].name, "textures/wood.png");
+    EXPECT_EQ(s.assets[0].sha256, sha256_bytes("png bytes"));
+    EXPECT_EQ(s.assets[1].name, "assets/" + sha256_bytes("other bytes").substr(0, 16) + "/stone.png");
+    EXPECT_EQ(s.yaml.find("../shared"), std::string::npos) << s.yaml;
+}
+
 TEST(Remote, UnreachableDaemonExits3NamingTheAddress) {
     TempDir d;
     JobArgs a;

@@ -3,6 +3,7 @@
 #include <type_traits>
 
 #include "bsdf/models.h"
+#include "texture/bitmap_texture.h"
 
 namespace omega {
 
@@ -37,6 +38,14 @@ std::optional<BsdfSample> bsdf_sample(const Bsdf& b, const Vec3& wo, float uc, V
             else return sample(m, wo, u);
         },
         b);
+}
+
+const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
+    DiffuseBsdf d = std::get<DiffuseBsdf>(b);
+    d.reflectance = d.reflectance_tex->eval(uv);
+    d.reflectance_tex = nullptr;
+    tmp = d;
+    return tmp;
 }
 
 uint8_t bsdf_lobes(const Bsdf& b) {

@@ -43,9 +43,15 @@ struct BsdfSample {
     bool is_delta() const { return lobe & kLobeDelta; }
 };
 
+struct BitmapTexture;  // texture/bitmap_texture.h
+
 struct DiffuseBsdf {
+    // With a texture: its mean, for the few uses that have no hit at hand (none in rendering).
     Rgb reflectance{0.5f, 0.5f, 0.5f};
     bool two_sided = true;
+    // Owned by the Scene; looked up per hit by resolve_bsdf(). Null in a SceneDesc (the
+    // description names the file in MaterialDesc::reflectance_texture instead).
+    const BitmapTexture* reflectance_tex = nullptr;
 };
 
 // Conductor: alpha == 0 is a smooth mirror. Without eta/k (has_ior false) Fresnel is 1.
@@ -82,5 +88,16 @@ inline bool bsdf_is_delta_only(const Bsdf& b) {
     return l != kLobeNone && (l & (kLobeDiffuse | kLobeGlossy)) == 0;
 }
 inline bool bsdf_has_nondelta(const Bsdf& b) { return bsdf_lobes(b) & (kLobeDiffuse | kLobeGlossy); }
+
+// Textured parameters, resolved at one surface point: the BSDF models never see a texture.
+// Returns `b` itself when nothing in it is textured (no copy: the common case costs one test),
+// otherwise `tmp`, filled with `b` whose textured parameters are looked up at `uv`.
+// Every evaluation of a scene BSDF at a hit goes through this (path tracer, subpath walks,
+// connections), so all integrators see the same textured albedo.
+const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp);
+inline const Bsdf& resolve_bsdf(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
+    const auto* d = std::get_if<DiffuseBsdf>(&b);
+    return d && d->reflectance_tex ? resolve_textured(b, uv, tmp) : b;
+}
 
 }  // namespace omega

@@ -77,7 +77,8 @@ Rgb PathTracer::radiance(Ray ray, Rng& rng, TracerStats& stats) const {
         }
         if (k >= max_depth) break;  // the next edge would exceed max_depth
 
-        const Bsdf& bsdf = scene_.bsdf_of(hit);
+        Bsdf textured;  // holds the BSDF at this hit when its material is textured
+        const Bsdf& bsdf = scene_.bsdf_at(hit, textured);
         if (std::holds_alternative<BlackBsdf>(bsdf)) break;
         Frame shading = Frame::from_normal(hit.ns);
         Vec3 wo_local = shading.to_local(wo);

@@ -119,7 +119,8 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
         if (wo_local.z == 0) break;
         float uc = rng.next_1d();
         Vec2 u{rng.next_1d(), rng.next_1d()};
-        auto bs = bsdf_sample(*cur.bsdf, wo_local, uc, u, mode);
+        Bsdf textured;  // v.bsdf is the scene's material; textures are looked up at the hit's uv
+        auto bs = bsdf_sample(resolve_bsdf(*cur.bsdf, cur.hit.uv, textured), wo_local, uc, u, mode);
         if (!bs || is_black(bs->weight)) break;
         Vec3 wi = cur.shading.to_world(bs->wi);
         if (!consistent_side(wi, hit.ng, bs->wi.z)) break;
@@ -190,12 +191,14 @@ double to_area_density(const PathVertex& from, double pdf_sa, const PathVertex& 
 Rgb vertex_f(const PathVertex& v, const Vec3& wi, TransportMode mode) {
     Vec3 wo_l = v.shading.to_local(v.wo), wi_l = v.shading.to_local(wi);
     if (!consistent_side(wi, v.hit.ng, wi_l.z)) return Rgb(0.f);
-    Rgb f = bsdf_eval(*v.bsdf, wo_l, wi_l, mode);
+    Bsdf textured;
+    Rgb f = bsdf_eval(resolve_bsdf(*v.bsdf, v.hit.uv, textured), wo_l, wi_l, mode);
     if (mode == TransportMode::Importance) f *= shading_correction(v, v.wo, wi);
     return f;
 }
 
 double vertex_pdf_sa(const PathVertex& v, const Vec3& from, const Vec3& to) {
+    // No resolve_bsdf: only a diffuse reflectance can be textured, and no density depends on it.
     return bsdf_pdf_sa(*v.bsdf, v.shading.to_local(from), v.shading.to_local(to), TransportMode::Radiance);
 }
 

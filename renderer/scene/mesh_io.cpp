@@ -16,6 +16,8 @@ struct Merger {
     TriangleMesh out;
     bool all_have_normals = true;
     std::string error;
+    bool any_uvs = false;
+    bool flip_v = true;
 
     void visit(const aiNode* node, const aiMatrix4x4& parent, int depth) {
         if (depth > 256) {  // a cyclic or absurd node graph must not overflow the stack
@@ -45,6 +47,8 @@ struct Merger {
         }
         bool has_n = mesh->HasNormals();
         all_have_normals &= has_n;
+        bool has_uv = mesh->HasTextureCoords(0);
+        any_uvs |= has_uv;
         for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
             aiVector3D p = m * mesh->mVertices[v];
             out.positions.push_back({p.x, p.y, p.z});
@@ -54,6 +58,11 @@ struct Merger {
             } else {
                 out.normals.push_back({0, 0, 0});
             }
+            // A part without uvs gets (0, 0): only the parts that have them are textured meaningfully.
+            Vec2 uv{};
+            if (has_uv) uv = {mesh->mTextureCoords[0][v].x, mesh->mTextureCoords[0][v].y};
+            if (has_uv && flip_v) uv.y = 1.f - uv.y;
+            out.uvs.push_back(uv);
         }
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const aiFace& face = mesh->mFaces[f];
@@ -71,7 +80,7 @@ struct Merger {
 
 }  // namespace
 
-TriangleMesh load_mesh_file(const std::string& path, const SourceLoc& loc) {
+TriangleMesh load_mesh_file(const std::string& path, const SourceLoc& loc, bool flip_tex_coords) {
     std::string at = loc.key.empty() ? fmt::format("{}:{}: ", loc.file, loc.line)
                                      : fmt::format("{}:{}: {}: ", loc.file, loc.line, loc.key);
     Assimp::Importer importer;
@@ -80,11 +89,13 @@ TriangleMesh load_mesh_file(const std::string& path, const SourceLoc& loc) {
     if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode)
         throw SceneError(fmt::format("{}cannot load mesh '{}': {}", at, path, importer.GetErrorString()));
     Merger merger{scene, {}, true, {}};
+    merger.flip_v = flip_tex_coords;
     merger.visit(scene->mRootNode, aiMatrix4x4(), 0);
     if (!merger.error.empty()) throw SceneError(fmt::format("{}mesh '{}': {}", at, path, merger.error));
     if (merger.out.indices.empty()) throw SceneError(fmt::format("{}mesh '{}' has no triangles", at, path));
     // Shading normals only make sense if every vertex has one.
     if (!merger.all_have_normals) merger.out.normals.clear();
+    if (!merger.any_uvs) merger.out.uvs.clear();
     return std::move(merger.out);
 }
 

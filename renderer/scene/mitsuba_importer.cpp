@@ -206,8 +206,10 @@ private:
     }
     // A colour parameter (<rgb>, <srgb>, <spectrum>, <float>, a bitmap <texture> or a <ref> to one)
     // as YAML: a number or [r, g, b].
-    YAML::Node colour(pugi::xml_node c, const std::string& key);
+    // With texture_ok (a diffuse reflectance), a bitmap becomes a v1 `{type: bitmap, ...}` mapping.
+    YAML::Node colour(pugi::xml_node c, const std::string& key, bool texture_ok = false);
     Rgb texture_average(pugi::xml_node tex, const std::string& key);
+    YAML::Node bitmap(pugi::xml_node tex, const std::string& key);
 
     // ---- transforms
     YAML::Node transform_ops(pugi::xml_node t, const std::string& key);
@@ -304,7 +306,8 @@ Rgb Importer::texture_average(pugi::xml_node tex, const std::string& key) {
     OIIO::ImageBuf buf(p.string());
     if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) fail(fn, key + ".filename", "cannot read '" + file + "': " + buf.geterror());
     const OIIO::ImageSpec& spec = buf.spec();
-    bool srgb = !raw && (spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::UINT16);
+    const auto native = buf.nativespec().format.basetype;  // spec() says FLOAT after the converting read
+    bool srgb = !raw && (native == OIIO::TypeDesc::UINT8 || native == OIIO::TypeDesc::UINT16);
     int nc = spec.nchannels;
     std::vector<float> px(size_t(spec.width) * size_t(spec.height) * size_t(nc));
     buf.get_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, px.data());
@@ -318,17 +321,52 @@ Rgb Importer::texture_average(pugi::xml_node tex, const std::string& key) {
     Rgb avg{float(sum[0] / double(n)), float(sum[1] / double(n)), float(sum[2] / double(n))};
     for (int ch = 0; ch < 3; ++ch) avg[ch] = std::clamp(avg[ch], 0.f, 1.f);
     warn(tex, key,
-         fmt::format("bitmap '{}': Omega has no textures yet; using its average colour [{:.4g}, {:.4g}, {:.4g}]{}", file,
-                     avg.x, avg.y, avg.z, srgb ? " (sRGB-decoded)" : ""));
+         fmt::format("bitmap '{}': Omega textures only a diffuse reflectance; using its average colour [{:.4g}, {:.4g}, "
+                     "{:.4g}]{}",
+                     file, avg.x, avg.y, avg.z, srgb ? " (sRGB-decoded)" : ""));
     return avg;
 }
 
-YAML::Node Importer::colour(pugi::xml_node c, const std::string& key) {
+YAML::Node Importer::bitmap(pugi::xml_node tex, const std::string& key) {
+    Elem e{tex, key, {}};
+    YAML::Node y(YAML::NodeType::Map);
+    y["type"] = "bitmap";
+    pugi::xml_node fn = find_param(e, "filename");
+    if (!fn) fail(tex, key, "bitmap texture needs a 'filename' string");
+    fs::path p(attr(fn, "value", key + ".filename"));
+    if (p.is_relative()) p = dir_ / p;
+    y["file"] = p.lexically_normal().string();  // the v1 parser checks that it exists
+    if (auto c = find_param(e, "filter_type")) y["filter"] = attr(c, "value", key);
+    if (auto c = find_param(e, "wrap_mode")) y["wrap"] = attr(c, "value", key);
+    if (auto c = find_param(e, "raw")) y["raw"] = scalar(c, key);
+    if (auto c = find_param(e, "to_uv")) {
+        // Mitsuba reads to_uv as the 2D affine part (rows and columns x, y, w) of the 4x4 it builds.
+        Mat4 m = to_world(c, key + ".to_uv");
+        bool planar = m(0, 2) == 0 && m(1, 2) == 0 && m(2, 0) == 0 && m(2, 1) == 0;
+        if (planar) {
+            YAML::Node l(YAML::NodeType::Sequence);
+            for (auto [r, col] : {std::pair{0, 0}, {0, 1}, {0, 3}, {1, 0}, {1, 1}, {1, 3}}) l.push_back(fmt::format("{}", m(r, col)));
+            YAML::Node op(YAML::NodeType::Map);
+            op["matrix"] = l;
+            y["to_uv"] = op;
+        } else {
+            warn(c, key, "to_uv mixes in the z axis, which a uv map does not have; it was ignored");
+        }
+    }
+    // Storage and device details: the same texture values.
+    for (const char* ignored : {"format", "accel"})
+        if (auto c = find_param(e, ignored)) (void)c;
+    warn_unused(e);
+    return y;
+}
+
+YAML::Node Importer::colour(pugi::xml_node c, const std::string& key, bool texture_ok) {
     std::string tag = c.name();
     if (tag == "ref") {
         c = resolve_ref(c, key);
         tag = c.name();
     }
+    if (tag == "texture" && texture_ok && attr(c, "type", key) == "bitmap") return bitmap(c, key);
     if (tag == "texture") {
         Rgb a = texture_average(c, key);
         return list3(fmt::format("{}", a.x), fmt::format("{}", a.y), fmt::format("{}", a.z));
@@ -611,9 +649,9 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
             lines[yaml_key] = line_of(c);
         }
     };
-    auto put_colour = [&](const char* yaml_key, const char* xml_name) {
+    auto put_colour = [&](const char* yaml_key, const char* xml_name, bool texture_ok = false) {
         if (auto c = find_param(e, xml_name)) {
-            y[yaml_key] = colour(c, key + "." + xml_name);
+            y[yaml_key] = colour(c, key + "." + xml_name, texture_ok);
             lines[yaml_key] = line_of(c);
         }
     };
@@ -683,7 +721,7 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
     }
     if (type == "diffuse") {
         y["type"] = "diffuse";
-        put_colour("reflectance", "reflectance");
+        put_colour("reflectance", "reflectance", true);
         y["two_sided"] = two_sided;
     } else if (type == "conductor") {
         put_conductor();
@@ -700,7 +738,7 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         if (type == "roughdielectric") put_alpha("0.1");
     } else if (type == "plastic" || type == "roughplastic") {
         y["type"] = "diffuse";
-        put_colour("reflectance", "diffuse_reflectance");
+        put_colour("reflectance", "diffuse_reflectance", true);
         y["two_sided"] = two_sided;
         for (const char* p : {"specular_reflectance", "int_ior", "ext_ior", "nonlinear", "alpha", "distribution", "sample_visible"})
             (void)find_param(e, p);
@@ -781,7 +819,7 @@ void Importer::read_shape(pugi::xml_node n, size_t index) {
         fs::path abs = fs::absolute(p, ec);
         s.file = (ec ? p : abs).lexically_normal().string();
         if (auto c = find_param(e, "face_normals")) s.face_normals = attr(c, "value", key) == "true";
-        if (auto c = find_param(e, "flip_tex_coords")) (void)c;  // no textures: no effect
+        if (auto c = find_param(e, "flip_tex_coords")) s.flip_tex_coords = attr(c, "value", key) != "false";
     }
     if (auto c = find_param(e, "flip_normals")) s.flip_normals = attr(c, "value", key) == "true";
 

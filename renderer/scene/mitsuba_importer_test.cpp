@@ -76,6 +76,15 @@ void expect_same(const SceneDesc& a, const SceneDesc& b) {
     for (const auto& [name, m] : a.materials) {
         ASSERT_TRUE(b.materials.count(name)) << name;
         const Bsdf &x = m.bsdf, &y = b.materials.at(name).bsdf;
+        const auto &tx = m.reflectance_texture, &ty = b.materials.at(name).reflectance_texture;
+        ASSERT_EQ(tx.has_value(), ty.has_value()) << name;
+        if (tx) {
+            EXPECT_EQ(tx->file, ty->file) << name;
+            EXPECT_EQ(tx->filter, ty->filter) << name;
+            EXPECT_EQ(tx->wrap, ty->wrap) << name;
+            EXPECT_EQ(tx->raw, ty->raw) << name;
+            EXPECT_EQ(tx->to_uv.m, ty->to_uv.m) << name;
+        }
         ASSERT_EQ(x.index(), y.index()) << name;
         if (auto* d = std::get_if<DiffuseBsdf>(&x)) {
             auto* e = std::get_if<DiffuseBsdf>(&y);
@@ -113,6 +122,7 @@ void expect_same(const SceneDesc& a, const SceneDesc& b) {
         EXPECT_EQ(p.material, q.material) << i;
         EXPECT_EQ(p.flip_normals, q.flip_normals) << i;
         EXPECT_EQ(p.face_normals, q.face_normals) << i;
+        EXPECT_EQ(p.flip_tex_coords, q.flip_tex_coords) << i;
         ASSERT_EQ(p.emitter.has_value(), q.emitter.has_value()) << i;
         if (p.emitter) {
             EXPECT_EQ(p.emitter->radiance, q.emitter->radiance) << i;
@@ -423,22 +433,62 @@ TEST(MitsubaImporter, MeshesResolveAgainstTheSceneFolder) {
     expect_round_trip(d, dir.path.string());
 }
 
-TEST(MitsubaImporter, BitmapIsAveragedWithAWarning) {
+TEST(MitsubaImporter, BitmapMapsToATexture) {
     TempDir dir;
     // A 2x1 8-bit PPM: red and black. sRGB-decoded average: (0.5, 0, 0).
     std::string ppm = "P6\n2 1\n255\n";
     ppm += std::string("\xff\x00\x00\x00\x00\x00", 6);
     dir.write("tex.ppm", ppm);
     auto xml = dir.write("scene.xml", R"(<scene version="3.0.0">
-<texture type="bitmap" id="t"><string name="filename" value="tex.ppm"/></texture>
-<bsdf type="diffuse" id="inline"><texture type="bitmap" name="reflectance"><string name="filename" value="tex.ppm"/></texture></bsdf>
+<texture type="bitmap" id="t"><string name="filename" value="tex.ppm"/><string name="filter_type" value="nearest"/>
+  <string name="wrap_mode" value="clamp"/><boolean name="raw" value="true"/>
+  <transform name="to_uv"><scale x="2" y="3"/><translate x="0.5" y="0.25"/></transform></texture>
+<bsdf type="diffuse" id="inline"><texture type="bitmap" name="reflectance"><string name="filename" value="tex.ppm"/>
+  <string name="format" value="fp16"/>
+  <float name="bogus" value="1"/></texture></bsdf>
 <bsdf type="diffuse" id="byref"><ref name="reflectance" id="t"/></bsdf>
+<bsdf type="plastic" id="plastic"><ref name="diffuse_reflectance" id="t"/></bsdf>
+<bsdf type="conductor" id="metal"><ref name="specular_reflectance" id="t"/></bsdf>
+<bsdf type="diffuse" id="spun"><texture type="bitmap" name="reflectance"><string name="filename" value="tex.ppm"/>
+  <transform name="to_uv"><rotate x="1" angle="30"/></transform></texture></bsdf>
 <shape type="cube"><ref id="inline"/></shape>
 <shape type="cube"><ref id="byref"/></shape>
+<shape type="cube"><ref id="plastic"/></shape>
+<shape type="cube"><ref id="metal"/></shape>
+<shape type="cube"><ref id="spun"/></shape>
+<shape type="obj"><string name="filename" value="tri.obj"/><boolean name="flip_tex_coords" value="false"/></shape>
 )" + std::string(kLitBox) + "</scene>");
+    dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
     SceneDesc d = import_mitsuba_file(xml.string());
-    for (const char* m : {"inline", "byref"}) expect_rgb(std::get<DiffuseBsdf>(d.materials.at(m).bsdf).reflectance, 0.5f, 0, 0);
-    EXPECT_TRUE(has_warning(d, "bitmap 'tex.ppm': Omega has no textures yet; using its average colour")) << all_warnings(d);
+    const std::string file = (dir.path / "tex.ppm").lexically_normal().string();
+    const auto& in = d.materials.at("inline").reflectance_texture;
+    ASSERT_TRUE(in);
+    EXPECT_EQ(in->file, file);
+    EXPECT_EQ(in->filter, TexFilter::Bilinear);
+    EXPECT_EQ(in->wrap, TexWrap::Repeat);
+    EXPECT_FALSE(in->raw);
+    EXPECT_TRUE(in->to_uv.is_identity());
+    for (const char* m : {"byref", "plastic"}) {
+        const auto& t = d.materials.at(m).reflectance_texture;
+        ASSERT_TRUE(t) << m;
+        EXPECT_EQ(t->file, file);
+        EXPECT_EQ(t->filter, TexFilter::Nearest);
+        EXPECT_EQ(t->wrap, TexWrap::Clamp);
+        EXPECT_TRUE(t->raw);
+        EXPECT_EQ(t->to_uv.m, (std::array<float, 6>{2, 0, 0.5f, 0, 3, 0.25f}));
+    }
+    EXPECT_FALSE(d.shapes[5].flip_tex_coords);
+    // Bitmaps are no longer averaged for a diffuse reflectance; other parameters still are, by name.
+    EXPECT_FALSE(has_warning(d, "bsdf(inline).reflectance: bitmap")) << all_warnings(d);
+    EXPECT_FALSE(has_warning(d, "bsdf(byref).reflectance: bitmap")) << all_warnings(d);
+    EXPECT_TRUE(has_warning(d, "scene.xml:7: bsdf(inline).reflectance: parameter 'bogus' (<float>) is not supported"))
+        << all_warnings(d);
+    EXPECT_TRUE(has_warning(d, "bsdf(metal).specular_reflectance: bitmap 'tex.ppm': Omega textures only a diffuse "
+                               "reflectance; using its average colour [0.5, 0, 0]"))
+        << all_warnings(d);
+    EXPECT_TRUE(has_warning(d, "bsdf(spun).reflectance: to_uv mixes in the z axis")) << all_warnings(d);
+    EXPECT_TRUE(d.materials.at("spun").reflectance_texture->to_uv.is_identity());
+    expect_round_trip(d, dir.path.string());
 }
 
 TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {

@@ -26,6 +26,9 @@ struct SurfaceHit {
     uint32_t shape = 0;  // index into Scene::shapes()
     uint32_t prim = 0;
     bool planar = true;  // a triangle: cannot be hit again by a ray leaving it
+    // Surface coordinates (Mitsuba's conventions per shape), filled only on shapes whose material
+    // is textured, so untextured scenes pay nothing for them; (0, 0) elsewhere.
+    Vec2 uv{};
 };
 
 }  // namespace omega

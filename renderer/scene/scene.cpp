@@ -43,6 +43,21 @@ void fill_ray(RTCRay& r, const Ray& ray) {
     r.flags = 0;
 }
 
+// Mitsuba's sphere map: u = phi / 2 pi in [0, 1) around local z from +x, v = theta / pi from +z.
+Vec2 sphere_uv(const Shape& sh, const Vec3& n_out) {
+    Vec3 l{dot(n_out, sh.sphere_axes[0]), dot(n_out, sh.sphere_axes[1]), dot(n_out, sh.sphere_axes[2])};
+    float u = std::atan2(l.y, l.x) * kInv2Pi;
+    if (u < 0) u += 1.f;
+    return {u, std::acos(std::clamp(l.z, -1.f, 1.f)) * kInvPi};
+}
+
+Vec2 triangle_uv(const Shape& sh, uint32_t i0, uint32_t i1, uint32_t i2, float b0, float b1, float b2) {
+    const auto& uvs = sh.mesh.uvs;
+    if (uvs.empty()) return {b1, b2};
+    Vec2 uv{uvs[i0].x * b0 + uvs[i1].x * b1 + uvs[i2].x * b2, uvs[i0].y * b0 + uvs[i1].y * b1 + uvs[i2].y * b2};
+    return sh.uv_map == UvMap::Disk ? disk_uv(uv) : uv;
+}
+
 }  // namespace
 
 Scene::~Scene() {
@@ -75,6 +90,7 @@ bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
     hit.prim = rh.hit.primID;
     if (sh.kind == ShapeKind::Sphere) {
         sphere_hit_point(sh.sphere.center, sh.sphere.radius, ray, hit.t, hit);
+        if (sh.uv_map != UvMap::None) hit.uv = sphere_uv(sh, hit.ng);
         if (sh.flip_normals) {
             hit.ng = -hit.ng;
             hit.ns = -hit.ns;
@@ -111,6 +127,7 @@ bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
         }
         hit.ng = ng;
         hit.planar = true;
+        if (sh.uv_map != UvMap::None) hit.uv = triangle_uv(sh, i0, i1, i2, b0, b1, b2);
     }
     return true;
 }

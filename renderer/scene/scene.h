@@ -17,10 +17,19 @@
 #include "scene/sphere_geometry.h"
 #include "scene/triangle_mesh.h"
 #include "sensor/sensor.h"
+#include "texture/bitmap_texture.h"
 
 namespace omega {
 
 enum class ShapeKind : uint8_t { Triangles, Sphere };
+
+// How Scene::intersect fills SurfaceHit::uv. None unless the shape's material is textured.
+enum class UvMap : uint8_t {
+    None,
+    Vertex,  // barycentric interpolation of mesh.uvs; the barycentrics (b1, b2) if there are none
+    Disk,    // mesh.uvs hold object-space (x, y); interpolated, then disk_uv()
+    Sphere,  // Mitsuba's spherical map in the sphere's own frame (sphere_axes)
+};
 
 struct Shape {
     ShapeKind kind = ShapeKind::Triangles;
@@ -30,6 +39,8 @@ struct Shape {
     TriangleMesh mesh;      // world space (triangles)
     std::vector<Vec3> face_normals;  // unit geometric normal per triangle (from the baked winding)
     SphereData sphere;      // world space (sphere); Embree keeps a pointer to it
+    UvMap uv_map = UvMap::None;
+    Vec3 sphere_axes[3];    // sphere: unit world directions of its local x, y, z (for uv)
     double area = 0;                     // world-space surface area
     DiscreteDistribution tri_by_area;    // triangles, for uniform area sampling
     std::string name;                    // for messages: "shapes[3]"
@@ -64,7 +75,10 @@ public:
     const Sensor& sensor() const { return sensor_; }
     const SceneDesc& desc() const { return desc_; }
     const SceneBounds& bounds() const { return bounds_; }
+    // The material as described; its textures are not yet looked up.
     const Bsdf& bsdf_of(const SurfaceHit& h) const { return materials_[shapes_[h.shape].material]; }
+    // The BSDF at the hit, textures looked up at h.uv (see resolve_bsdf): what rendering evaluates.
+    const Bsdf& bsdf_at(const SurfaceHit& h, Bsdf& tmp) const { return resolve_bsdf(bsdf_of(h), h.uv, tmp); }
     // The raw BVH, for benchmarks that measure Embree's own rate on the same scene.
     RTCScene embree_scene() const { return rtc_; }
 
@@ -77,6 +91,7 @@ private:
     RTCScene rtc_ = nullptr;
     std::vector<Shape> shapes_;
     std::vector<Bsdf> materials_;
+    std::vector<std::unique_ptr<BitmapTexture>> textures_;  // materials_ point into these
     std::vector<Light> lights_;
     DiscreteDistribution light_select_;
     int env_light_ = -1;

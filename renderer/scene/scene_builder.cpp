@@ -1,6 +1,8 @@
 // Resource loading: SceneDesc -> Scene. Only what the scene references is loaded; materials no
-// shape uses are not built.
+// shape uses are not built, and their textures are not read. Each image file is decoded once,
+// however many materials name it.
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -49,6 +51,18 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
 
     // Materials are built only if some shape references them.
     std::unordered_map<std::string, uint32_t> material_index;
+    std::map<std::pair<std::string, bool>, std::shared_ptr<const Image>> images;  // (file, raw)
+    auto texture_for = [&](const BitmapDesc& bd) -> const BitmapTexture* {
+        auto& img = images[{bd.file, bd.raw}];
+        if (!img) img = load_image(bd.file, bd.raw, fmt::format("{}: {}: ", where(bd.loc), bd.loc.key));
+        auto tex = std::make_unique<BitmapTexture>();
+        tex->image = img;
+        tex->filter = bd.filter;
+        tex->wrap = bd.wrap;
+        tex->to_uv = bd.to_uv;
+        s->textures_.push_back(std::move(tex));
+        return s->textures_.back().get();
+    };
     auto material_for = [&](const ShapeDesc& sd, size_t i) -> uint32_t {
         auto it = material_index.find(sd.material);
         if (it != material_index.end()) return it->second;
@@ -56,9 +70,20 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
         if (m == desc.materials.end())
             throw SceneError(fmt::format("{}: shapes[{}].material: unknown material '{}'", where(sd.loc), i, sd.material));
         uint32_t idx = uint32_t(s->materials_.size());
-        s->materials_.push_back(m->second.bsdf);
+        Bsdf b = m->second.bsdf;
+        if (const auto& bd = m->second.reflectance_texture) {
+            auto* d = std::get_if<DiffuseBsdf>(&b);
+            if (!d) throw SceneError(fmt::format("{}: {}: only a diffuse reflectance can be a bitmap", where(bd->loc), bd->loc.key));
+            d->reflectance_tex = texture_for(*bd);
+            d->reflectance = d->reflectance_tex->mean();
+        }
+        s->materials_.push_back(b);
         material_index.emplace(sd.material, idx);
         return idx;
+    };
+    auto textured = [&](uint32_t material) {
+        const auto* d = std::get_if<DiffuseBsdf>(&s->materials_[material]);
+        return d && d->reflectance_tex;
     };
 
     s->shapes_.reserve(desc.shapes.size());
@@ -81,16 +106,24 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
                 throw SceneError(fmt::format("{}: {}.radius: must be positive and finite", where(sd.loc), sh.name));
             sh.sphere = {c, r};
             sh.area = 4.0 * kPiD * r * r;
+            if (textured(sh.material)) {
+                sh.uv_map = UvMap::Sphere;
+                sh.sphere_axes[0] = Vec3(normalize(ax));
+                sh.sphere_axes[1] = Vec3(normalize(ay));
+                sh.sphere_axes[2] = Vec3(normalize(az));
+            }
         } else {
             sh.kind = ShapeKind::Triangles;
             switch (sd.type) {
-                case ShapeType::Mesh: sh.mesh = load_mesh_file(sd.file, sd.loc); break;
+                case ShapeType::Mesh: sh.mesh = load_mesh_file(sd.file, sd.loc, sd.flip_tex_coords); break;
                 case ShapeType::Rectangle: sh.mesh = make_rectangle(); break;
                 case ShapeType::Cube: sh.mesh = make_cube(); break;
                 case ShapeType::Disk: sh.mesh = make_disk(); break;
                 case ShapeType::Sphere: break;
             }
             if (sd.face_normals) sh.mesh.normals.clear();
+            if (textured(sh.material)) sh.uv_map = sd.type == ShapeType::Disk ? UvMap::Disk : UvMap::Vertex;
+            else sh.mesh.uvs.clear();  // nothing looks them up
             auto tf = Transform::make(sd.to_world);
             if (!tf) throw SceneError(fmt::format("{}: {}.to_world: matrix is singular", where(sd.loc), sh.name));
             bake_mesh(sh.mesh, *tf, sd.flip_normals, sd.drop_degenerate, sd.loc, sh.name);

@@ -11,6 +11,7 @@
 #include "bsdf/bsdf.h"
 #include "math/transform.h"
 #include "math/vec.h"
+#include "texture/texture_types.h"
 
 namespace omega {
 
@@ -77,10 +78,24 @@ struct SensorDesc {
     SourceLoc loc;
 };
 
+// A `{type: bitmap, file: ...}` value: Mitsuba's bitmap texture. The file is checked to exist at
+// parse time and decoded when a shape's material needs it (Scene::build).
+struct BitmapDesc {
+    std::string file;  // absolute path
+    TexFilter filter = TexFilter::Bilinear;
+    TexWrap wrap = TexWrap::Repeat;
+    bool raw = false;  // false: 8/16-bit data is sRGB-decoded to linear
+    UvTransform to_uv;
+    SourceLoc loc;     // of the bitmap mapping, for load errors
+};
+
 struct MaterialDesc {
     std::string name;
     Bsdf bsdf;
     SourceLoc loc;
+    // Diffuse only: the reflectance is this bitmap (the bsdf's own reflectance is then unused).
+    // Last, so that {name, bsdf, loc} still initialises an untextured material.
+    std::optional<BitmapDesc> reflectance_texture;
 };
 
 struct EmitterDesc {
@@ -102,6 +117,7 @@ struct ShapeDesc {
     bool flip_normals = false;
     bool face_normals = false;       // mesh: ignore the file's vertex normals
     bool drop_degenerate = false;    // mesh: skip zero-area triangles instead of failing
+    bool flip_tex_coords = true;     // mesh: v' = 1 - v (Mitsuba's default for OBJ and PLY)
     SourceLoc loc;
 };
 

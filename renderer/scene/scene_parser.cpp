@@ -197,6 +197,93 @@ float parse_ior(ParamBag& b, const std::string& key, float def) {
     return x;
 }
 
+// A file named relative to the scene file's folder, checked to be readable; returns the normalised
+// absolute path. (The folder comes from the value's file name, as the parser was given it.)
+std::string existing_file(const ParamValue& fv) {
+    std::string file = fv.as_string();
+    if (file.empty()) fv.fail("must not be empty");
+    fs::path p(file);
+    if (p.is_relative()) {
+        fs::path dir = fs::path(fv.file()).parent_path();
+        p = (dir.empty() ? fs::path(".") : dir) / p;
+    }
+    std::error_code ec;
+    bool ok = fs::is_regular_file(p, ec) && std::ifstream(p).good();
+    if (!ok) fv.fail("cannot open '" + file + "'");
+    fs::path abs = fs::absolute(p, ec);
+    return (ec ? p : abs).lexically_normal().string();
+}
+
+// Two numbers, [a, b], or one number for both when `single_ok`.
+std::pair<float, float> pair_of(const ParamValue& v, bool single_ok) {
+    if (single_ok && v.is_scalar()) {
+        float x = v.as_float();
+        return {x, x};
+    }
+    if (!v.is_list() || v.node().size() != 2)
+        v.fail(std::string(single_ok ? "expected a number or [u, v], got " : "expected [u, v], got ") + v.describe());
+    auto items = v.as_list();
+    return {items[0].as_float(), items[1].as_float()};
+}
+
+UvTransform uv_op(const ParamValue& item) {
+    ParamBag b(item);
+    std::vector<std::pair<std::string, ParamValue>> ops;
+    for (const char* op : {"matrix", "translate", "rotate", "scale"})
+        if (auto x = b.get(op)) ops.emplace_back(op, *x);
+    b.check_unused();
+    if (ops.size() != 1)
+        item.fail("expected exactly one of matrix, translate, rotate, scale (use a list to combine them)");
+    const auto& [op, v] = ops[0];
+    UvTransform t;
+    if (op == "matrix") {
+        if (!v.is_list() || v.node().size() != 6) v.fail("expected 6 numbers [a, b, c, d, e, f] (u' = a u + b v + c, v' = d u + e v + f), got " + v.describe());
+        auto items = v.as_list();
+        for (size_t i = 0; i < 6; ++i) t.m[i] = items[i].as_float();
+    } else if (op == "translate") {
+        auto [tu, tv] = pair_of(v, false);
+        t.m = {1, 0, tu, 0, 1, tv};
+    } else if (op == "scale") {
+        auto [su, sv] = pair_of(v, true);
+        t.m = {su, 0, 0, 0, sv, 0};
+    } else {  // rotate: degrees, counter-clockwise in the (u, v) plane, as Mitsuba's rotation about z
+        double a = v.as_double() * kPiD / 180.0;
+        float c = float(std::cos(a)), s = float(std::sin(a));
+        t.m = {c, -s, 0, s, c, 0};
+    }
+    return t;
+}
+
+UvTransform parse_to_uv(const ParamValue& v) {
+    UvTransform t;
+    if (v.is_list()) {
+        for (const ParamValue& item : v.as_list()) t = uv_op(item).after(t);  // the first applies first
+    } else if (v.is_map()) {
+        t = uv_op(v);
+    } else {
+        v.fail("expected a uv transform mapping or a list of them, got " + v.describe());
+    }
+    for (float x : t.m)
+        if (!std::isfinite(x)) v.fail("the uv transform is not finite");
+    return t;
+}
+
+BitmapDesc parse_bitmap(const ParamValue& v) {
+    ParamBag b(v);
+    BitmapDesc t;
+    t.loc = v.loc();
+    ParamBag::enum_value<int>(b.require("type"), {{"bitmap", 0}});
+    t.file = existing_file(b.require("file"));
+    t.filter = b.get_enum<TexFilter>("filter", {{"bilinear", TexFilter::Bilinear}, {"nearest", TexFilter::Nearest}},
+                                     t.filter);
+    t.wrap = b.get_enum<TexWrap>("wrap", {{"repeat", TexWrap::Repeat}, {"mirror", TexWrap::Mirror}, {"clamp", TexWrap::Clamp}},
+                                 t.wrap);
+    t.raw = b.get_bool("raw", t.raw);
+    if (auto u = b.get("to_uv")) t.to_uv = parse_to_uv(*u);
+    b.check_unused();
+    return t;
+}
+
 MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::vector<std::string>& warnings) {
     ParamBag b(v);
     MaterialDesc m;
@@ -209,7 +296,10 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
     switch (type) {
         case MatType::Diffuse: {
             DiffuseBsdf d;
-            d.reflectance = rgb_in(b, "reflectance", d.reflectance, 0, 1);
+            if (b.has("reflectance") && b.get("reflectance")->is_map())
+                m.reflectance_texture = parse_bitmap(*b.get("reflectance"));
+            else
+                d.reflectance = rgb_in(b, "reflectance", d.reflectance, 0, 1);
             d.two_sided = b.get_bool("two_sided", true);
             m.bsdf = d;
             break;
@@ -369,22 +459,15 @@ ShapeDesc parse_shape(const ParamValue& item, size_t index, ShapeCtx& ctx) {
     s.name = b.get_string("name", "");
     if (auto v = b.get("to_world")) s.to_world = parse_to_world(*v);
     if (s.type == ShapeType::Mesh) {
-        ParamValue fv = b.require("file");
-        std::string file = fv.as_string();
-        if (file.empty()) fv.fail("must not be empty");
-        fs::path p(file);
-        if (p.is_relative()) p = ctx.dir / p;
-        std::error_code ec;
-        bool ok = fs::is_regular_file(p, ec) && std::ifstream(p).good();
-        if (!ok) fv.fail("cannot open '" + file + "'");
-        fs::path abs = fs::absolute(p, ec);
-        s.file = (ec ? p : abs).lexically_normal().string();
+        s.file = existing_file(b.require("file"));
         s.face_normals = b.get_bool("face_normals", false);
         s.drop_degenerate = b.get_bool("drop_degenerate", false);
+        s.flip_tex_coords = b.get_bool("flip_tex_coords", true);
     } else {
         reject(b, "file", "by this shape type (only mesh)");
         reject(b, "face_normals", "by this shape type (only mesh)");
         reject(b, "drop_degenerate", "by this shape type (only mesh)");
+        reject(b, "flip_tex_coords", "by this shape type (only mesh)");
     }
     if (s.type == ShapeType::Sphere) {
         s.center = b.get_vec3("center", s.center);

@@ -51,9 +51,32 @@ std::string alpha(float au, float av) {
     return fmt::format(", alpha_u: {}, alpha_v: {}", num(au), num(av));
 }
 
-std::string material(const Bsdf& b) {
+// A path relative to base_dir when it is given and the path can be expressed so.
+std::string rel_path(const std::string& file, const std::string& base_dir) {
+    if (base_dir.empty()) return file;
+    std::error_code ec;
+    fs::path rel = fs::relative(fs::path(file), fs::absolute(fs::path(base_dir), ec), ec);
+    return !ec && !rel.empty() ? rel.generic_string() : file;
+}
+
+std::string bitmap(const BitmapDesc& t, const std::string& base_dir) {
+    std::string s = fmt::format("{{type: bitmap, file: {}, filter: {}, wrap: {}, raw: {}", q(rel_path(t.file, base_dir)),
+                                t.filter == TexFilter::Nearest ? "nearest" : "bilinear",
+                                t.wrap == TexWrap::Clamp ? "clamp" : t.wrap == TexWrap::Mirror ? "mirror" : "repeat", t.raw);
+    if (!t.to_uv.is_identity()) {
+        s += ", to_uv: {matrix: [";
+        for (size_t i = 0; i < 6; ++i) s += (i ? ", " : "") + num(t.to_uv.m[i]);
+        s += "]}";
+    }
+    return s + "}";
+}
+
+std::string material(const MaterialDesc& m, const std::string& base_dir) {
+    const Bsdf& b = m.bsdf;
     if (auto* d = std::get_if<DiffuseBsdf>(&b))
-        return fmt::format("{{type: diffuse, reflectance: {}, two_sided: {}}}", rgb(d->reflectance), d->two_sided);
+        return fmt::format("{{type: diffuse, reflectance: {}, two_sided: {}}}",
+                           m.reflectance_texture ? bitmap(*m.reflectance_texture, base_dir) : rgb(d->reflectance),
+                           d->two_sided);
     if (auto* c = std::get_if<ConductorBsdf>(&b)) {
         std::string s = "{type: conductor";
         if (c->has_ior) s += fmt::format(", eta: {}, k: {}", rgb(c->eta), rgb(c->k));
@@ -138,7 +161,7 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
         if (name == implicit) continue;
         if (!any_material) o += "materials:\n";
         any_material = true;
-        o += fmt::format("  {}: {}\n", q(name), material(m.bsdf));
+        o += fmt::format("  {}: {}\n", q(name), material(m, base_dir));
     }
 
     if (!d.shapes.empty()) o += "shapes:\n";
@@ -148,14 +171,9 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
         if (!is_identity(sh.to_world)) o += fmt::format("    to_world: {}\n", matrix(sh.to_world));
         if (sh.type == ShapeType::Sphere) o += fmt::format("    center: {}\n    radius: {}\n", vec(sh.center), num(sh.radius));
         if (sh.type == ShapeType::Mesh) {
-            std::string file = sh.file;
-            if (!base_dir.empty()) {
-                std::error_code ec;
-                fs::path rel = fs::relative(fs::path(sh.file), fs::absolute(fs::path(base_dir), ec), ec);
-                if (!ec && !rel.empty()) file = rel.generic_string();
-            }
-            o += fmt::format("    file: {}\n", q(file));
+            o += fmt::format("    file: {}\n", q(rel_path(sh.file, base_dir)));
             if (sh.face_normals) o += "    face_normals: true\n";
+            if (!sh.flip_tex_coords) o += "    flip_tex_coords: false\n";
             if (sh.drop_degenerate) o += "    drop_degenerate: true\n";
         }
         if (sh.material != implicit) o += fmt::format("    material: {}\n", q(sh.material));

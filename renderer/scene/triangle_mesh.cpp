@@ -15,12 +15,34 @@ std::string prefix(const SourceLoc& loc) {
     return fmt::format("{}:{}: {}: ", loc.file, loc.line, loc.key);
 }
 
+// Mitsuba 3's cube mesh maps every face onto [0, 1]^2; these are the affine maps its vertex table
+// implies (checked corner by corner in triangle_mesh_test.cpp).
+Vec2 cube_face_uv(int axis, int sign, const Vec3& p) {
+    auto h = [](float c) { return 0.5f * (c + 1.f); };  // [-1, 1] -> [0, 1]
+    switch (axis * 2 + (sign > 0)) {
+        case 0: return {h(p.y), h(p.z)};   // -x
+        case 1: return {h(p.y), h(-p.z)};  // +x
+        case 2: return {h(p.z), h(p.x)};   // -y
+        case 3: return {h(-p.x), h(-p.z)}; // +y
+        case 4: return {h(-p.y), h(p.x)};  // -z
+        default: return {h(p.y), h(p.x)};  // +z
+    }
+}
+
 }  // namespace
+
+Vec2 disk_uv(Vec2 xy) {
+    float r = std::sqrt(xy.x * xy.x + xy.y * xy.y);
+    float v = std::atan2(xy.y, xy.x) * kInv2Pi;
+    if (v < 0) v += 1.f;
+    return {r, v};
+}
 
 TriangleMesh make_rectangle() {
     TriangleMesh m;
     m.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
     m.normals.assign(4, Vec3{0, 0, 1});
+    for (const Vec3& p : m.positions) m.uvs.push_back({0.5f * p.x + 0.5f, 0.5f * p.y + 0.5f});
     m.indices = {0, 1, 2, 0, 2, 3};  // counter-clockwise seen from +z
     return m;
 }
@@ -38,8 +60,10 @@ TriangleMesh make_cube() {
             v[(axis + 2) % 3] = float(sign);
             uint32_t base = uint32_t(m.positions.size());
             for (auto [a, b] : {std::pair{-1.f, -1.f}, {1.f, -1.f}, {1.f, 1.f}, {-1.f, 1.f}}) {
-                m.positions.push_back(n + u * a + v * b);
+                Vec3 p = n + u * a + v * b;
+                m.positions.push_back(p);
                 m.normals.push_back(n);
+                m.uvs.push_back(cube_face_uv(axis, sign, p));
             }
             for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.indices.push_back(base + i);
         }
@@ -55,6 +79,7 @@ TriangleMesh make_disk(int segments) {
         m.positions.push_back({float(std::cos(phi)), float(std::sin(phi)), 0.f});
     }
     m.normals.assign(m.positions.size(), Vec3{0, 0, 1});
+    for (const Vec3& p : m.positions) m.uvs.push_back({p.x, p.y});
     for (int i = 0; i < segments; ++i) {
         m.indices.push_back(0);
         m.indices.push_back(uint32_t(1 + i));
@@ -69,6 +94,8 @@ size_t bake_mesh(TriangleMesh& mesh, const Transform& to_world, bool flip_normal
     if (mesh.indices.size() % 3 != 0) throw SceneError(at + what + ": index count is not a multiple of 3");
     if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
         throw SceneError(at + what + ": normal count differs from vertex count");
+    if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
+        throw SceneError(at + what + ": uv count differs from vertex count");
 
     for (size_t i = 0; i < mesh.positions.size(); ++i) {
         Vec3d p = to_world.point(Vec3d(mesh.positions[i]));

@@ -13,18 +13,28 @@ namespace omega {
 struct TriangleMesh {
     std::vector<Vec3> positions;
     std::vector<Vec3> normals;      // per vertex shading normals, empty = flat shading
+    // Per vertex surface coordinates, empty = none. For the disk they hold the object-space (x, y)
+    // (linear over each triangle), turned into Mitsuba's polar (r, phi / 2 pi) after interpolation.
+    std::vector<Vec2> uvs;
     std::vector<uint32_t> indices;  // 3 per triangle
     size_t triangle_count() const { return indices.size() / 3; }
 };
 
 // Object-space primitives of scene format v1.
+// Their uvs follow Mitsuba 3: rectangle ((x + 1) / 2, (y + 1) / 2); each cube face onto [0, 1]^2
+// as Mitsuba's cube mesh lays it out; the disk's local (x, y) (see TriangleMesh::uvs).
 TriangleMesh make_rectangle();             // [-1,1]^2 in z = 0, normal +z
 TriangleMesh make_cube();                  // [-1,1]^3, outward normals
 TriangleMesh make_disk(int segments = 64); // unit disk in z = 0, normal +z
 
-// Loads OBJ, PLY or glTF through Assimp (all meshes in the file merged, triangulated).
+// Mitsuba's disk uv from the object-space point: (radius, angle / 2 pi in [0, 1)).
+Vec2 disk_uv(Vec2 local_xy);
+
+// Loads OBJ, PLY or glTF through Assimp (all meshes in the file merged, triangulated), with the
+// first uv channel if the file has one. flip_tex_coords (Mitsuba's default, true) turns the
+// files' v-up convention into the textures' v-down one: v' = 1 - v.
 // Throws SceneError naming `loc` and the file on failure.
-TriangleMesh load_mesh_file(const std::string& path, const SourceLoc& loc);
+TriangleMesh load_mesh_file(const std::string& path, const SourceLoc& loc, bool flip_tex_coords = true);
 
 // Applies to_world (normals by the inverse transpose, in double), flips normals if asked, and
 // validates: non-finite positions and zero-area triangles are errors naming the shape and the

@@ -135,3 +135,61 @@ TEST_F(MitsubaCli, ConvergeWithAnUnknownIntegratorIsExitCode2) {
                          path("conv"));
     EXPECT_EQ(r.code, 2) << r.output;
 }
+
+// --no-reference: the estimated relative variance per checkpoint, its slope, and the mode named.
+TEST_F(MitsubaCli, ConvergeWithoutAReferenceReportsTheEstimatedVariance) {
+    Result r = run_omega("converge " + xml_ + " --integrators path --budget 2 --runs 1 --threads 1 --no-reference --out-dir " +
+                         path("var"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("mode: variance (no reference)"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("rendering one with the path tracer"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(path("var/reference.exr")));
+    std::ifstream csv(path("var/path.csv"));
+    std::string header, row1, row2;
+    std::getline(csv, header);
+    std::getline(csv, row1);
+    std::getline(csv, row2);
+    EXPECT_EQ(header, "time_target_s,runs,time_s,spp,relvar,relvar_sd,relvar_min,relvar_max,efficiency,efficiency_sd");
+    EXPECT_EQ(row1.rfind("1,1,", 0), 0u) << row1;
+    EXPECT_EQ(row2.rfind("2,1,", 0), 0u) << row2;
+    // Pure Monte Carlo noise: the variance falls as 1/t. Two checkpoints a factor ~2 apart in
+    // time; the estimate of a 16 x 16 image's mean variance is good to a few percent.
+    auto pos = r.output.find("log-log slope ");
+    ASSERT_NE(pos, std::string::npos) << r.output;
+    double slope = std::stod(r.output.substr(pos + 14));
+    EXPECT_GT(slope, -1.3) << r.output;
+    EXPECT_LT(slope, -0.7) << r.output;
+    Result bad = run_omega("converge " + xml_ + " --no-reference --reference-time 1 --budget 1 --out-dir " + path("var"));
+    EXPECT_EQ(bad.code, 2) << bad.output;
+}
+
+// A textured diffuse reflectance through the importer: the YAML renders what the XML renders, and
+// a texture file that cannot be decoded is a scene error (exit 2) naming the file.
+TEST_F(MitsubaCli, TexturedSceneImportsAndBadTexturesAreExitCode2) {
+    // A 2 x 2 binary PPM (8-bit, so sRGB-decoded).
+    std::string ppm = "P6\n2 2\n255\n";
+    ppm += std::string("\xff\x20\x10\x10\xff\x20\x20\x10\xff\x80\x80\x80", 12);
+    write("tex.ppm", ppm);
+    std::string xml = kXml;
+    xml.replace(xml.find(R"(<rgb name="reflectance" value="0.5, 0.5, 0.5"/>)"),
+                std::string(R"(<rgb name="reflectance" value="0.5, 0.5, 0.5"/>)").size(),
+                R"(<texture type="bitmap" name="reflectance"><string name="filename" value="tex.ppm"/></texture>)");
+    std::string tx = write("tex.xml", xml);
+    Result imp = run_omega("import " + tx + " -o " + path("tex.yaml"));
+    ASSERT_EQ(imp.code, 0) << imp.output;
+    EXPECT_EQ(imp.output.find("average colour"), std::string::npos) << imp.output;
+    Result a = run_omega("render " + tx + " -q --spp 2 -o " + path("a.exr"));
+    ASSERT_EQ(a.code, 0) << a.output;
+    Result b = run_omega("render " + path("tex.yaml") + " -q --spp 2 -o " + path("b.exr"));
+    ASSERT_EQ(b.code, 0) << b.output;
+    EXPECT_EQ(omega::read_exr(path("a.exr")).rgb, omega::read_exr(path("b.exr")).rgb);
+
+    write("tex.ppm", "P6\ngarbage");
+    Result bad = run_omega("render " + path("tex.yaml") + " -q --spp 1 -o " + path("c.exr"));
+    EXPECT_EQ(bad.code, 2) << bad.output;
+    EXPECT_NE(bad.output.find("cannot read texture '" + path("tex.ppm") + "'"), std::string::npos) << bad.output;
+    fs::remove(path("tex.ppm"));
+    Result missing = run_omega("render " + path("tex.yaml") + " -q --spp 1 -o " + path("c.exr"));
+    EXPECT_EQ(missing.code, 2) << missing.output;
+    EXPECT_NE(missing.output.find("reflectance.file: cannot open"), std::string::npos) << missing.output;
+}

@@ -1,0 +1,29 @@
+#pragma once
+// A bitmap texture as Mitsuba 3 defines it: uv (0, 0) is the first texel of the first stored row
+// (the image's top-left corner), u runs along a row and v down the rows; texel (i, j) covers
+// [i/w, (i+1)/w] x [j/h, (j+1)/h]. Bilinear interpolation weighs the four nearest texel centres.
+//
+// Built once with the Scene, then read-only: eval() is safe to call from every render thread.
+#include <memory>
+
+#include "texture/image.h"
+#include "texture/texture_types.h"
+
+namespace omega {
+
+struct BitmapTexture {
+    std::shared_ptr<const Image> image;  // shared by every texture that names the same file
+    TexFilter filter = TexFilter::Bilinear;
+    TexWrap wrap = TexWrap::Repeat;
+    UvTransform to_uv;
+
+    // The reflectance at surface coordinates `uv` (to_uv is applied here).
+    Rgb eval(Vec2 uv) const;
+    // The average texel: stands in for the texture where no hit is at hand.
+    Rgb mean() const;
+};
+
+// Index `i` folded into [0, n) by the wrap mode (Dr.Jit's rules, as Mitsuba 3 uses them).
+int wrap_index(long long i, int n, TexWrap wrap);
+
+}  // namespace omega
