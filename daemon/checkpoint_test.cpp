@@ -79,10 +79,18 @@ TEST(Config, ReadsEveryKeyAndNamesTheBadOne) {
   std::string p = temp("cfg.yaml");
   {
     std::ofstream f(p);
-    f << "listen: [unix:/tmp/x.sock]\nthreads: 3\nmax_running: 2\nallowed_roots: [/srv/assets]\nlog_level: warn\n";
+    f << "listen: [unix:/tmp/x.sock]\nthreads: 3\nmax_running: 2\nallowed_roots: [/srv/assets]\nlog_level: warn\n"
+         "auth_fail_limit: 5\n";
   }
   Config c = load_config(p);
   EXPECT_EQ(c.threads, 3);
+  EXPECT_EQ(c.auth_fail_limit, 5);
+  EXPECT_EQ(Config{}.auth_fail_limit, 10);  // the documented default
+  {
+    std::ofstream f(p);
+    f << "auth_fail_limit: -1\n";
+  }
+  EXPECT_THROW(load_config(p), std::runtime_error);
   EXPECT_EQ(c.max_running, 2);
   EXPECT_EQ(c.allowed_roots.at(0), "/srv/assets");
   {

@@ -94,6 +94,7 @@ Config load_config(const std::string& path) {
   r.scalar("max_scene_memory_bytes", c.max_scene_memory_bytes);
   r.scalar("frame_timeout_s", c.frame_timeout_s);
   r.scalar("handshake_timeout_s", c.handshake_timeout_s);
+  r.scalar("auth_fail_limit", c.auth_fail_limit);
   r.strings("admins", c.admins);
   r.scalar("tls_cert", c.tls_cert);
   r.scalar("tls_key", c.tls_key);
@@ -155,6 +156,7 @@ void validate_config(const Config& c) {
   if (!(c.max_time_s > 0)) bad("max_time_s: must be > 0");
   if (c.frame_timeout_s < 0) bad("frame_timeout_s: must be >= 0");
   if (!(c.handshake_timeout_s > 0)) bad("handshake_timeout_s: must be > 0");
+  if (c.auth_fail_limit < 0) bad("auth_fail_limit: must be >= 0 (0: no limit)");
   for (const auto& [user, token] : c.tcp_users)
     if (!valid_tcp_user_name(user)) bad("tcp_users: '" + user + "' is not a valid TCP user name");
   for (const auto& r : c.allowed_roots)

@@ -36,11 +36,15 @@ struct Config {
   std::uint64_t max_scene_memory_bytes = 8ull << 30;  // estimated memory of a built scene + film
   double frame_timeout_s = 30;         // a frame begun must be complete within this (0: never)
   double handshake_timeout_s = 10;     // hello (and auth on TCP) must be done within this
+  // Failed TCP authentications one source address may make in a sliding minute; beyond it every
+  // auth from that address is refused (auth_failed, the token unchecked) until the oldest
+  // failure is a minute old. 0: no limit.
+  int auth_fail_limit = 10;
   // Access. TCP users and their tokens (shared secrets for the HMAC handshake); empty = TCP
   // without authentication (owner "tcp"), which is allowed only on loopback listeners.
   std::map<std::string, std::string> tcp_users;  // user -> token
-  std::vector<std::string> admins;
-  std::string tls_cert, tls_key;  // PEM files: when both are set, every TCP listener speaks TLS  // identities that may act on any job: uids (unix) or TCP user names
+  std::vector<std::string> admins;  // identities that may act on any job: uids (unix) or TCP user names
+  std::string tls_cert, tls_key;  // PEM files: when both are set, every TCP listener speaks TLS
 };
 
 // Throws std::runtime_error "FILE: key: what" for an unreadable file, an unknown key or a bad

@@ -84,7 +84,7 @@ JobStore::JobStore(const std::string& path) : path_(path) {
     db_ = nullptr;
     throw std::runtime_error(path + ": " + msg);
   }
-  sqlite3_busy_timeout(db_, 5000);
+  sqlite3_busy_timeout(db_, kDefaultBusyMs);
   exec("PRAGMA journal_mode=WAL");
   exec("PRAGMA synchronous=FULL");
   exec(
@@ -186,6 +186,20 @@ void JobStore::set_state(std::uint64_t id, protocol::JobState st, const std::str
   s.bind(1, std::string(protocol::to_string(st))).bind(2, message).bind(3, static_cast<std::int64_t>(id));
   s.step();
 }
+
+void JobStore::set_outcome(std::uint64_t id, protocol::JobState st, const protocol::ProgressInfo& p,
+                           const std::string& message) {
+  Stmt s(db_,
+         "UPDATE jobs SET state = ?, message = ?, pass = ?, spp = ?, elapsed_s = ?, rel_error = ?, samples_per_s = ?"
+         " WHERE id = ?",
+         path_);
+  s.bind(1, std::string(protocol::to_string(st))).bind(2, message);
+  s.bind(3, static_cast<std::int64_t>(p.pass)).bind(4, static_cast<std::int64_t>(p.spp)).bind(5, p.elapsed_s);
+  s.bind_opt(6, p.rel_error).bind(7, p.samples_per_s).bind(8, static_cast<std::int64_t>(id));
+  s.step();
+}
+
+void JobStore::set_busy_timeout_ms(int ms) { sqlite3_busy_timeout(db_, ms); }
 
 void JobStore::set_priority(std::uint64_t id, std::int64_t p) {
   Stmt s(db_, "UPDATE jobs SET priority = ? WHERE id = ?", path_);

@@ -48,10 +48,32 @@ class JobStore {
   std::size_t count_unfinished();
   std::size_t count_unfinished(const std::string& owner);  // max_jobs_per_owner
 
+  // Every write below is one statement (atomic). A write that cannot get the database within the
+  // busy timeout (another process holds it locked) or fails throws std::runtime_error with
+  // SQLite's message ("database is locked", "disk I/O error"): the caller decides whether to
+  // retry (Server::retry_store) or to refuse the request with an error frame.
   void set_state(std::uint64_t id, protocol::JobState s, const std::string& message = {});
+  // A finished or stopped job's state, message and progress in one statement.
+  void set_outcome(std::uint64_t id, protocol::JobState s, const protocol::ProgressInfo& p,
+                   const std::string& message = {});
   void set_priority(std::uint64_t id, std::int64_t p);
   void set_progress(std::uint64_t id, const protocol::ProgressInfo& p);
   void remove(std::uint64_t id);
+
+  // How long a statement waits for a lock held elsewhere before failing (default 5000 ms).
+  // While it waits, the loop thread is blocked; retries use a short one (QuickBusy).
+  void set_busy_timeout_ms(int ms);
+  class QuickBusy {  // scope guard: a short busy timeout, then the default again
+   public:
+    explicit QuickBusy(JobStore& s, int ms = 100) : s_(s) { s_.set_busy_timeout_ms(ms); }
+    ~QuickBusy() { s_.set_busy_timeout_ms(kDefaultBusyMs); }
+    QuickBusy(const QuickBusy&) = delete;
+    QuickBusy& operator=(const QuickBusy&) = delete;
+
+   private:
+    JobStore& s_;
+  };
+  static constexpr int kDefaultBusyMs = 5000;
 
  private:
   void exec(const char* sql);

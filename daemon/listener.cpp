@@ -43,6 +43,16 @@ bool is_loopback_sockaddr(const sockaddr_storage& ss) {
   return false;
 }
 
+// The address alone, without the port: the key of the failed-login rate limit.
+std::string sockaddr_host(const sockaddr_storage& ss) {
+  char buf[INET6_ADDRSTRLEN] = "?";
+  if (ss.ss_family == AF_INET)
+    inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(&ss)->sin_addr, buf, sizeof buf);
+  else if (ss.ss_family == AF_INET6)
+    inet_ntop(AF_INET6, &reinterpret_cast<const sockaddr_in6*>(&ss)->sin6_addr, buf, sizeof buf);
+  return buf;
+}
+
 std::string sockaddr_text(const sockaddr_storage& ss) {
   char buf[INET6_ADDRSTRLEN] = "?";
   int port = 0;
@@ -212,6 +222,7 @@ int Listener::accept_one(Peer& peer) {
     int one = 1;
     setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
     peer.name = sockaddr_text(ss);
+    peer.address = sockaddr_host(ss);
   }
   return fd;
 }

@@ -25,6 +25,7 @@ struct Peer {
   bool loopback_listener = false;  // accepted on a loopback TCP listener
   std::optional<unsigned> uid;  // SO_PEERCRED on unix sockets
   std::string name;             // for logs: "uid 1000 pid 42" or "127.0.0.1:5555"
+  std::string address;          // TCP: the source address without the port ("127.0.0.1", "::1")
 };
 
 class Listener {

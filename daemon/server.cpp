@@ -317,6 +317,10 @@ void Server::begin_drain(const char* why) {
 
 void Server::maybe_finish_shutdown() {
   if (phase_ != Phase::draining || !active_.empty()) return;
+  if (!unrecorded_.empty())
+    log_.warn("{} job end(s) could not be recorded in the job store; those jobs are queued again at the next start "
+              "and finish from their final checkpoint",
+              unrecorded_.size());
   // Give clients what is queued for them (best effort, without blocking), then stop.
   for (auto& [id, c] : conns_) c->flush();
   log_.info("drained; exiting");
@@ -348,6 +352,13 @@ void Server::sweep_timeouts() {
     c->dead = true;
     dirty_.insert(id);
   }
+  flush_dirty();
+  for (auto it = auth_failures_.begin(); it != auth_failures_.end();) {
+    auto next = std::next(it);
+    recent_auth_failures(it->first, now);  // drops the address once its last failure is a minute old
+    it = next;
+  }
+  retry_store();
   flush_dirty();
   loop_.add_timer(1.0, [this] { sweep_timeouts(); });
 }

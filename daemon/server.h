@@ -4,7 +4,9 @@
 // background thread talk to it only through EventLoop::post().
 #include <tbb/global_control.h>
 
+#include <chrono>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
@@ -27,6 +29,10 @@
 #include "daemon/tls.h"
 
 namespace omega::daemon {
+
+// The error code for a request that failed on a store error: `busy` for what passes (a lock held
+// elsewhere, a full disk), `internal` otherwise. Any thread.
+protocol::ErrorCode store_error_code(const std::string& what);
 
 class Server : public FrameSink {
  public:
@@ -75,12 +81,16 @@ class Server : public FrameSink {
 
   // server_requests.cpp: protocol handlers (loop thread).
   void handle_frame(Connection& c, protocol::DecodedFrame& f);
+  void dispatch(Connection& c, const protocol::DecodedFrame& f, protocol::Message& m);  // throws on store errors
   void reply_error(Connection& c, std::uint64_t id, protocol::ErrorCode code, const std::string& msg);
   // The job's owner, root, the daemon's own uid, or an identity in cfg_.admins.
   bool may_access(const Connection& c, const JobRecord& r) const;
   void deny(Connection& c, std::uint64_t id, std::string_view what, const JobRecord& r);
   bool tcp_auth_required(const Connection& c) const;
   void on_auth(Connection& c, const protocol::DecodedFrame& f);
+  // Failed TCP authentications of one source address within the last minute (auth_fail_limit).
+  // Loop thread only.
+  std::size_t recent_auth_failures(const std::string& address, std::chrono::steady_clock::time_point now);
   void on_submit(Connection& c, protocol::Submit s);
   void on_asset(Connection& c, protocol::Asset a);
   void enforce_asset_cache_limit();
@@ -99,10 +109,18 @@ class Server : public FrameSink {
     std::string staging;
   };
   void on_validated(std::uint64_t conn, const protocol::Submit& s, Validation v);
+  // Starts and preempts jobs. A store error (SQLite locked) is logged and the whole decision is
+  // retried every second by retry_store(); it never leaves reschedule().
   void reschedule();
+  void reschedule_now();  // throws on a store error
   void start_job(const JobRecord& r);
   void on_pass(PassUpdate u);
   void on_finish(WorkerResult r);
+  // Records a finished or stopped worker's outcome in the store and tells the subscribers.
+  // Throws on a store error, having changed nothing that a later call would not redo.
+  void record_finish(const WorkerResult& r);
+  // Every second (sweep_timeouts): outcomes the store refused, then a deferred reschedule.
+  void retry_store();
   void update_watched(std::uint64_t job);
   std::shared_ptr<const FilmSnapshot> latest_snapshot(std::uint64_t job);
   JobPaths paths(std::uint64_t job) const;
@@ -125,6 +143,17 @@ class Server : public FrameSink {
   TilePublisher publisher_{*this};
   std::map<std::uint64_t, Active> active_;
   std::map<std::uint64_t, Memo> memo_;
+  // The concurrency rule for all members above and below: the loop thread alone reads and writes
+  // them (workers and the background thread only post closures to loop_), so no lock is taken.
+  // Worker outcomes the store refused (e.g. "database is locked"): retried by retry_store(); the
+  // job's store row still says running meanwhile.
+  std::map<std::uint64_t, WorkerResult> unrecorded_;
+  bool reschedule_pending_ = false;  // a reschedule() hit a store error; retry_store() redoes it
+  std::chrono::steady_clock::time_point progress_backoff_until_{};  // skip progress writes until then
+  // Source address -> times of its failed TCP authentications in the last minute (at most
+  // auth_fail_limit of them; addresses pruned by sweep_timeouts, at most kMaxAuthFailAddresses).
+  std::map<std::string, std::deque<std::chrono::steady_clock::time_point>> auth_failures_;
+  static constexpr std::size_t kMaxAuthFailAddresses = 65536;
   enum class Phase { serving, draining, stopped } phase_ = Phase::serving;
   int exit_code_ = 0;
   Background background_;  // last: destroyed first, while the rest still exists

@@ -16,6 +16,12 @@ namespace fs = std::filesystem;
 using protocol::ErrorCode;
 using protocol::JobState;
 
+ErrorCode store_error_code(const std::string& what) {
+  const bool transient = what.find("locked") != std::string::npos || what.find("busy") != std::string::npos ||
+                         what.find("disk") != std::string::npos || what.find("No space") != std::string::npos;
+  return transient ? ErrorCode::busy : ErrorCode::internal;
+}
+
 void Server::validate(Connection& c, std::uint64_t submit_id) {
   PendingSubmit& p = c.pending.at(submit_id);
   p.validating = true;
@@ -107,11 +113,7 @@ void Server::on_validated(std::uint64_t conn, const protocol::Submit& s, Validat
   } catch (const std::exception& e) {
     fs::remove_all(v.staging, ec);
     log_.error("submit '{}': cannot store the job: {}", s.name, e.what());
-    const std::string what = e.what();
-    const bool transient = what.find("locked") != std::string::npos || what.find("busy") != std::string::npos ||
-                           what.find("disk") != std::string::npos || what.find("No space") != std::string::npos;
-    return reply_error(*c, s.id, transient ? ErrorCode::busy : ErrorCode::internal,
-                       "cannot store the job: " + what);
+    return reply_error(*c, s.id, store_error_code(e.what()), std::string("cannot store the job: ") + e.what());
   }
   log_.info("job {} accepted from {} (user {}): '{}', priority {}, seed {}", job, c->peer().name, c->user, s.name,
             s.priority, s.seed);
@@ -124,6 +126,16 @@ void Server::on_validated(std::uint64_t conn, const protocol::Submit& s, Validat
 }
 
 void Server::reschedule() {
+  try {
+    reschedule_now();
+    reschedule_pending_ = false;
+  } catch (const std::exception& e) {
+    if (!reschedule_pending_) log_.error("scheduling failed: {}; retrying every second", e.what());
+    reschedule_pending_ = true;
+  }
+}
+
+void Server::reschedule_now() {
   if (phase_ != Phase::serving) return;
   std::vector<SchedJob> queued, running;
   int stopping = 0, preempting = 0;
@@ -146,9 +158,10 @@ void Server::reschedule() {
   }
   SchedDecision d = schedule(queued, running, cfg_.max_running - stopping, preempting);
   for (std::uint64_t id : d.preempt) {
+    // The store first: if it refuses, the job keeps rendering and the store still says running.
+    store_->set_state(id, JobState::queued);
     log_.info("job {}: preempted by a higher-priority job; back to the queue", id);
     active_.at(id).worker->request_stop(StopKind::preempt);
-    store_->set_state(id, JobState::queued);
   }
   for (std::uint64_t id : d.start) start_job(by_id.at(id));
 }
@@ -182,7 +195,7 @@ void Server::start_job(const JobRecord& r) {
         });
       });
   worker->set_watched(publisher_.watchers(r.id) > 0);
-  store_->set_state(r.id, JobState::running);
+  store_->set_state(r.id, JobState::running);  // throws before the worker starts: still queued
   publisher_.progress(r.id, JobState::running, r.progress);
   log_.info("job {}: started ('{}', priority {})", r.id, r.name, r.priority);
   worker->start();
@@ -195,7 +208,16 @@ void Server::on_pass(PassUpdate u) {
   m.film = u.film;
   std::optional<JobRecord> r = store_->get(u.job);
   if (!r) return;
-  store_->set_progress(u.job, u.progress);
+  // Progress rows are advisory (on_finish records the final one): a store that refuses them must
+  // not block the loop for its busy timeout at every pass, nor stop the tiles.
+  if (const auto now = std::chrono::steady_clock::now(); now >= progress_backoff_until_) {
+    try {
+      store_->set_progress(u.job, u.progress);
+    } catch (const std::exception& e) {
+      progress_backoff_until_ = now + std::chrono::seconds(10);
+      log_.warn("job {}: cannot record progress in the job store: {}; rendering on, next try in 10 s", u.job, e.what());
+    }
+  }
   if (!u.tiles.empty()) publisher_.update_tiles(u.job, u.tiles, u.progress.pass, u.progress.spp);
   publisher_.progress(u.job, r->state, u.progress);
   log_.debug("job {}: pass {} done, {} spp, {:.2f} s", u.job, u.progress.pass, u.progress.spp, u.progress.elapsed_s);
@@ -208,38 +230,85 @@ void Server::on_finish(WorkerResult res) {
     active_.erase(it);
   }
   if (res.last) memo_[res.job].snapshot = res.last;
-  std::optional<JobRecord> r = store_->get(res.job);
-  if (r) {
-    protocol::ProgressInfo p = r->progress;
-    if (res.last) {
-      p.pass = res.last->pass;
-      p.spp = res.last->spp;
-      p.elapsed_s = res.last->elapsed_s;
-      p.rel_error = res.last->rel_error;
-    }
-    switch (res.outcome) {
-      case WorkerResult::Outcome::done:
-        if (r->state == JobState::running) {
-          store_->set_progress(res.job, p);
-          store_->set_state(res.job, JobState::done);
-          publisher_.done(res.job, JobState::done, p, std::nullopt);
-          log_.info("job {}: done: {} spp in {:.2f} s", res.job, p.spp, p.elapsed_s);
-        }
-        memo_.erase(res.job);  // result.exr and the final checkpoint serve it from now on
-        break;
-      case WorkerResult::Outcome::failed:
-        store_->set_state(res.job, JobState::failed, res.message);
-        publisher_.done(res.job, JobState::failed, p, res.message);
-        log_.error("job {}: failed: {}", res.job, res.message);
-        break;
-      case WorkerResult::Outcome::stopped:
-        log_.info("job {}: stopped ({}) at {} spp", res.job, to_string(res.stop), p.spp);
-        if (res.stop == StopKind::pause || res.stop == StopKind::preempt) publisher_.progress(res.job, store_->get(res.job)->state, p);
-        break;
-    }
+  try {
+    record_finish(res);
+  } catch (const std::exception& e) {
+    // Without this the row would say running until the next restart (nothing else rewrites it).
+    log_.error("job {}: cannot record its end in the job store: {}; retrying every second (it shows as running "
+               "until then)",
+               res.job, e.what());
+    unrecorded_[res.job] = std::move(res);
   }
   reschedule();
   maybe_finish_shutdown();
+}
+
+void Server::record_finish(const WorkerResult& res) {
+  std::optional<JobRecord> r = store_->get(res.job);
+  if (!r) return;  // deleted meanwhile
+  protocol::ProgressInfo p = r->progress;
+  if (res.last) {
+    p.pass = res.last->pass;
+    p.spp = res.last->spp;
+    p.elapsed_s = res.last->elapsed_s;
+    p.rel_error = res.last->rel_error;
+  }
+  switch (res.outcome) {
+    case WorkerResult::Outcome::done:
+      if (r->state == JobState::running) {
+        store_->set_outcome(res.job, JobState::done, p);
+        publisher_.done(res.job, JobState::done, p, std::nullopt);
+        log_.info("job {}: done: {} spp in {:.2f} s", res.job, p.spp, p.elapsed_s);
+      }
+      memo_.erase(res.job);  // result.exr and the final checkpoint serve it from now on
+      break;
+    case WorkerResult::Outcome::failed:
+      store_->set_outcome(res.job, JobState::failed, p, res.message);
+      publisher_.done(res.job, JobState::failed, p, res.message);
+      log_.error("job {}: failed: {}", res.job, res.message);
+      break;
+    case WorkerResult::Outcome::stopped: {
+      // pause, cancel and preempt wrote their state before asking the worker to stop; a row that
+      // still says running (a write lost some other way) gets the state the stop stands for.
+      // drain and now leave it running: the next start queues it again (recover_jobs).
+      std::optional<JobState> want;
+      if (r->state == JobState::running) {
+        if (res.stop == StopKind::pause) want = JobState::paused;
+        if (res.stop == StopKind::cancel) want = JobState::cancelled;
+        if (res.stop == StopKind::preempt) want = JobState::queued;
+      }
+      if (want) {
+        store_->set_outcome(res.job, *want, p);
+        log_.warn("job {}: the store still said running after a {} stop; recorded {}", res.job, to_string(res.stop),
+                  protocol::to_string(*want));
+        r->state = *want;
+      }
+      log_.info("job {}: stopped ({}) at {} spp", res.job, to_string(res.stop), p.spp);
+      if (res.stop == StopKind::pause || res.stop == StopKind::preempt) publisher_.progress(res.job, r->state, p);
+      break;
+    }
+  }
+}
+
+void Server::retry_store() {
+  if (!unrecorded_.empty()) {
+    JobStore::QuickBusy quick(*store_);  // a retry must not block the loop for the full busy timeout
+    for (auto it = unrecorded_.begin(); it != unrecorded_.end();) {
+      try {
+        record_finish(it->second);
+        log_.info("job {}: its end is recorded in the job store now", it->first);
+        it = unrecorded_.erase(it);
+        reschedule_pending_ = true;  // its slot and its state may let a queued job start
+      } catch (const std::exception&) {
+        ++it;  // logged at the first failure; the next second tries again
+      }
+    }
+  }
+  if (reschedule_pending_) {
+    JobStore::QuickBusy quick(*store_);
+    reschedule();
+    maybe_finish_shutdown();
+  }
 }
 
 void Server::update_watched(std::uint64_t job) {

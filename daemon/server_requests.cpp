@@ -1,6 +1,8 @@
 // Protocol request handlers. Loop thread.
 #include <unistd.h>
 
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <variant>
 
@@ -36,6 +38,18 @@ bool Server::may_access(const Connection& c, const JobRecord& r) const {
   return false;
 }
 
+std::size_t Server::recent_auth_failures(const std::string& address, std::chrono::steady_clock::time_point now) {
+  auto it = auth_failures_.find(address);
+  if (it == auth_failures_.end()) return 0;
+  auto& times = it->second;
+  while (!times.empty() && now - times.front() >= std::chrono::seconds(60)) times.pop_front();
+  if (times.empty()) {
+    auth_failures_.erase(it);
+    return 0;
+  }
+  return times.size();
+}
+
 bool Server::tcp_auth_required(const Connection& c) const { return !c.peer().unix_socket && !cfg_.tcp_users.empty(); }
 
 void Server::deny(Connection& c, std::uint64_t id, std::string_view what, const JobRecord& r) {
@@ -52,7 +66,32 @@ void Server::on_auth(Connection& c, const protocol::DecodedFrame& f) {
     c.closing = true;
     return;
   }
+  const auto now = std::chrono::steady_clock::now();
+  if (cfg_.auth_fail_limit > 0) {
+    // Too many failures from this address in the last minute: refuse without checking the MAC,
+    // so guessing tokens runs at auth_fail_limit tries per minute at most. Refusals do not count.
+    const std::size_t n = recent_auth_failures(c.peer().address, now);
+    if (n >= static_cast<std::size_t>(cfg_.auth_fail_limit)) {
+      const double wait = 60.0 - std::chrono::duration<double>(now - auth_failures_[c.peer().address].front()).count();
+      log_.warn("connection {} ({}): authentication as '{}' refused: {} failed attempts from {} in the last minute "
+                "(auth_fail_limit {}); closing",
+                c.id(), c.peer().name, a->user.substr(0, 256), n, c.peer().address, cfg_.auth_fail_limit);
+      reply_error(c, f.id, ErrorCode::auth_failed,
+                  fmt::format("too many failed authentications from {}: {} in the last minute (auth_fail_limit {}); "
+                              "try again in {:.0f} s",
+                              c.peer().address, n, cfg_.auth_fail_limit, std::max(1.0, std::ceil(wait))));
+      c.closing = true;
+      return;
+    }
+  }
   if (!check_auth(cfg_.tcp_users, c.nonce, a->user, a->mac)) {
+    if (cfg_.auth_fail_limit > 0) {
+      if (!auth_failures_.count(c.peer().address) && auth_failures_.size() >= kMaxAuthFailAddresses)
+        auth_failures_.erase(auth_failures_.begin());  // bounded memory against many source addresses
+      auto& times = auth_failures_[c.peer().address];
+      times.push_back(now);
+      while (times.size() > static_cast<std::size_t>(cfg_.auth_fail_limit)) times.pop_front();
+    }
     log_.warn("connection {} ({}): authentication failed for user '{}'; closing", c.id(), c.peer().name,
               a->user.substr(0, 256));
     reply_error(c, f.id, ErrorCode::auth_failed, "authentication failed: unknown user or wrong token");
@@ -135,6 +174,18 @@ void Server::handle_frame(Connection& c, protocol::DecodedFrame& f) {
     reply_error(c, f.id, ErrorCode::bad_request, std::string(protocol::to_string(m.code())) + ": " + m.message());
     return;
   }
+  // A request that hits a store error (SQLite locked past its busy timeout, disk I/O) gets an
+  // error frame naming it; the handlers write the store before acting, so nothing half happened.
+  try {
+    dispatch(c, f, *m);
+  } catch (const std::exception& e) {
+    log_.error("connection {} ({}): {} request failed: {}", c.id(), c.peer().name, protocol::to_string(f.type),
+               e.what());
+    reply_error(c, f.id, store_error_code(e.what()), std::string(protocol::to_string(f.type)) + ": " + e.what());
+  }
+}
+
+void Server::dispatch(Connection& c, const protocol::DecodedFrame& f, protocol::Message& m) {
   std::visit(
       [&](auto& msg) {
         using T = std::decay_t<decltype(msg)>;
@@ -177,7 +228,7 @@ void Server::handle_frame(Connection& c, protocol::DecodedFrame& f) {
                       "'" + std::string(protocol::to_string(f.type)) + "' is sent by the daemon, not to it");
         }
       },
-      *m);
+      m);
 }
 
 void Server::on_submit(Connection& c, protocol::Submit s) {
@@ -291,17 +342,19 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
   auto running = active_.find(job);
   const bool live = running != active_.end();
   switch (t) {
+    // The store before the worker: if the write throws (SQLite locked), nothing has changed and
+    // handle_frame answers with an error frame; the job renders on as before.
     case MessageType::cancel:
       if (finished(r->state)) return bad_state();
-      if (live) running->second.worker->request_stop(StopKind::cancel);
       store_->set_state(job, JobState::cancelled);
+      if (live) running->second.worker->request_stop(StopKind::cancel);
       publisher_.done(job, JobState::cancelled, r->progress, std::nullopt);
       log_.info("job {}: cancelled by {}", job, c.user);
       break;
     case MessageType::pause:
       if (r->state != JobState::queued && r->state != JobState::running) return bad_state();
-      if (live) running->second.worker->request_stop(StopKind::pause);
       store_->set_state(job, JobState::paused);
+      if (live) running->second.worker->request_stop(StopKind::pause);
       publisher_.progress(job, JobState::paused, r->progress);
       log_.info("job {}: paused by {}", job, c.user);
       break;

@@ -149,6 +149,16 @@ def watch(c, job, timeout=120):
             raise AssertionError(f"unexpected frame {h}")
 
 
+SANITIZER_REPORT = re.compile(r"WARNING: ThreadSanitizer|ERROR: AddressSanitizer|ERROR: LeakSanitizer|runtime error: ")
+
+
+def sanitizer_report(log):
+    """The first sanitizer report in a daemon's log (the presets asan/tsan), or None. A report
+    fails the test even when the daemon carried on (UBSan) or the test did not notice it exit."""
+    m = SANITIZER_REPORT.search(log)
+    return log[max(0, m.start() - 200):m.start() + 6000] if m else None
+
+
 class Test:
     """Runs named test functions in order with a fresh temp dir each; prints a summary."""
 
@@ -161,6 +171,10 @@ class Test:
         daemons = []
         try:
             fn(tmp, daemons)
+            for d in daemons:
+                report = sanitizer_report(d.log())
+                if report:
+                    raise AssertionError("omegad logged a sanitizer report:\n" + report)
             print(f"PASS {fn.__name__} ({time.monotonic() - t0:.1f} s)", flush=True)
         except Exception:
             import traceback

@@ -1,9 +1,10 @@
 """Faults: a corrupt checkpoint, a corrupt cached asset (caught by its hash), the SQLite database
-locked by another process. Each keeps every accepted job and leaves a clear log line. (kill -9
+locked by another process (at a submit, and at a job's end and a pause). Each keeps every accepted job and leaves a clear log line. (kill -9
 mid-pass is test_crash.py; a half frame held open is test_security.py.)"""
 import hashlib
 import os
 import random
+import re
 import sqlite3
 import subprocess
 import threading
@@ -104,6 +105,55 @@ def test_database_locked(tmp, daemons):
     wait_state(c, h["job"], {"done"})
 
 
+def hold_lock(d):
+    """Locks jobs.sqlite from another process (BEGIN EXCLUSIVE: in WAL mode readers go on, writers
+    get SQLITE_BUSY). Returns (thread, release event) once the lock is held."""
+    held, release = threading.Event(), threading.Event()
+
+    def locker():
+        db = sqlite3.connect(os.path.join(d.state_dir, "jobs.sqlite"), timeout=30, isolation_level=None)
+        db.execute("BEGIN EXCLUSIVE")
+        held.set()
+        release.wait(120)
+        db.execute("COMMIT")
+        db.close()
+
+    t = threading.Thread(target=locker)
+    t.start()
+    assert held.wait(30), "could not lock the database"
+    return t, release
+
+
+def test_database_locked_at_job_end(tmp, daemons):
+    """The store refuses every write while a job ends and while it is paused: the pause gets an
+    error frame and changes nothing, the job's end is retried until the lock goes (not left
+    'running' until a restart), and the queue carries on."""
+    scene = small_cornell(width=32, height=32)
+    d = Daemon(tmp, config="max_running: 1\n").start()
+    daemons.append(d)
+    c = d.client()
+    job = c.submit(scene, name="timed", halt_=op.halt(time_s=3))["job"]
+    wait_state(c, job, {"running"})
+    t, release = hold_lock(d)
+    try:
+        h = c.job("pause", job)
+        assert h["type"] == "error" and h["code"] == "busy" and "locked" in h["message"], h
+        d.wait_log(rf"job {job}: cannot record its end in the job store: .*locked.*retrying every second", timeout=90)
+        assert d.proc.poll() is None, "omegad died while the database was locked"
+        info = c.job("status", job)
+        assert info["state"] == "running", info  # the store has not got it yet
+    finally:
+        release.set()
+        t.join()
+    d.wait_log(rf"job {job}: its end is recorded in the job store now", timeout=30)
+    info = wait_state(c, job, {"done"}, timeout=30)
+    assert info["progress"]["spp"] > 0, info
+    assert not re.search(rf"job {job}: (paused|stopped)", d.log()), "the refused pause stopped the job"
+    h = c.submit(scene, name="after", halt_=op.halt(spp=1))
+    assert h["type"] == "accepted", h
+    wait_state(c, h["job"], {"done"})
+
+
 def test_kill9_at_random_moments(tmp, daemons):
     """Rounds of: clients submit (with a fresh asset each time) and render; kill -9 after a random
     delay (so at accept, during an upload, mid-pass or in a checkpoint write); restart. Every job
@@ -178,7 +228,8 @@ def test_disk_full(tmp, daemons):
 
 if __name__ == "__main__":
     t = Test()
-    for fn in (test_corrupt_checkpoint, test_corrupt_cached_asset, test_database_locked, test_kill9_at_random_moments,
+    for fn in (test_corrupt_checkpoint, test_corrupt_cached_asset, test_database_locked, test_database_locked_at_job_end,
+               test_kill9_at_random_moments,
                test_disk_full):
         t.run(fn)
     t.exit()

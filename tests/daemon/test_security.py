@@ -2,6 +2,7 @@
 admins, refusal of an open TCP listener without auth, per-owner and per-job limits, and the
 timeouts that free a connection stuck in a half frame or a handshake."""
 import os
+import signal
 import socket
 import struct
 import subprocess
@@ -154,6 +155,41 @@ def test_half_frame_and_silent_clients_time_out(tmp, daemons):
     assert d.client().request(lambda id: op.bare("ping", id))["type"] == "pong"
 
 
+def test_auth_fail_limit(tmp, daemons):
+    """auth_fail_limit failed logins from one address within a minute: every further auth from it
+    is refused with a clear auth_failed frame, even with the right token; other addresses and
+    unix sockets are unaffected; a reload to 0 lifts the limit."""
+    d = Daemon(tmp, config=CONFIG + "auth_fail_limit: 3\n").start()
+    daemons.append(d)
+
+    def attempt(token, source=None):
+        c = op.Client(d.tcp, source=source)
+        n = c.welcome[0]["nonce"]
+        return c, c.request(lambda id: op.auth(id, "alice", op.auth_mac(token.encode(), n, "alice")))
+
+    for _ in range(3):
+        c, h = attempt(BOB)
+        assert h["type"] == "error" and h["code"] == "auth_failed" and "too many" not in h["message"], h
+        assert closed(c)
+    c, h = attempt(ALICE)
+    assert h["type"] == "error" and h["code"] == "auth_failed", h
+    assert "too many failed authentications from 127.0.0.1" in h["message"] and "auth_fail_limit 3" in h["message"], h
+    assert closed(c)
+    d.wait_log(r"authentication as 'alice' refused: 3 failed attempts from 127\.0\.0\.1 in the last minute "
+               r"\(auth_fail_limit 3\)")
+    c, h = attempt(ALICE, source="127.0.0.2")
+    assert h["type"] == "ok", h
+    assert d.client().welcome[0]["auth"] == "peer"
+    with open(d.config_path) as f:
+        text = f.read()
+    with open(d.config_path, "w") as f:
+        f.write(text.replace("auth_fail_limit: 3", "auth_fail_limit: 0"))
+    mark = len(d.lines)
+    d.proc.send_signal(signal.SIGHUP)
+    d.wait_log(r"config reloaded", start=mark)
+    login(d, "alice", ALICE)
+
+
 def test_open_tcp_needs_auth(tmp, daemons):
     r = subprocess.run([OMEGAD, "--state-dir", os.path.join(tmp, "s"), "--listen", "tcp:0.0.0.0:0"],
                        capture_output=True, text=True, timeout=30)
@@ -163,6 +199,6 @@ def test_open_tcp_needs_auth(tmp, daemons):
 if __name__ == "__main__":
     t = Test()
     for fn in (test_tcp_handshake, test_owners_and_admins, test_job_limits, test_memory_estimate, test_asset_cache_lru,
-               test_half_frame_and_silent_clients_time_out, test_open_tcp_needs_auth):
+               test_half_frame_and_silent_clients_time_out, test_auth_fail_limit, test_open_tcp_needs_auth):
         t.run(fn)
     t.exit()

@@ -41,7 +41,11 @@ def test_socket_activation(tmp, daemons):
     daemons.append(d)
     sock = os.path.join(tmp, "activated.sock")
     # systemd-socket-activate listens, and starts omegad on the first connection with the socket as fd 3.
-    args = [tool, "-l", sock, OMEGAD, "--config", d.config_path, "--state-dir", d.state_dir, "--threads", "2"]
+    # It passes omegad a clean environment: forward the sanitizers' options (presets asan/tsan),
+    # or a TSan build would run without its suppressions.
+    env = [a for v in ("ASAN_OPTIONS", "UBSAN_OPTIONS", "TSAN_OPTIONS", "LSAN_OPTIONS") if v in os.environ
+           for a in ("-E", v)]
+    args = [tool, "-l", sock, *env, OMEGAD, "--config", d.config_path, "--state-dir", d.state_dir, "--threads", "2"]
     d.proc = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
     import threading
     threading.Thread(target=d._pump, args=(d.proc,), daemon=True).start()

@@ -184,7 +184,8 @@ def image(id, job, pass_, spp, width, height, exr):
 class Client:
     """One session with omegad. addr: "unix:/path" or "tcp:host:port". Every wait is bounded."""
 
-    def __init__(self, addr, timeout=20.0, client_name="omega_proto.py"):
+    def __init__(self, addr, timeout=20.0, client_name="omega_proto.py", source=None):
+        """source: a local address to connect from (TCP), e.g. "127.0.0.2"."""
         import socket
         if addr.startswith("unix:"):
             self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
@@ -196,6 +197,8 @@ class Client:
         else:
             raise ValueError(addr)
         self.sock.settimeout(timeout)
+        if source is not None:
+            self.sock.bind((source, 0))
         self.sock.connect(target)
         self.timeout = timeout
         self.decoder = Decoder()
