@@ -50,8 +50,8 @@ bool TileCanvas::apply(const protocol::Tile& t) {
             throw ClientError(kExitInternal, "tile: bad film size");
         width_ = img.display_width;
         height_ = img.display_height;
-        rgb_.assign(size_t(width_) * size_t(height_) * 3, 0.f);
-        var_.assign(rgb_.size(), 0.f);
+        rgb_.assign(size_t(height_), {});
+        var_.assign(size_t(height_), {});
         bx0_ = img.x0;
         by0_ = img.y0;
         bx1_ = img.x0 + img.width;
@@ -60,15 +60,18 @@ bool TileCanvas::apply(const protocol::Tile& t) {
     if (img.display_width != width_ || img.display_height != height_ || img.x0 + img.width > width_ ||
         img.y0 + img.height > height_)
         throw ClientError(kExitInternal, "tile: film size differs from earlier tiles'");
-    for (int y = 0; y < img.height; ++y)
+    for (int y = 0; y < img.height; ++y) {
+        std::vector<float>& rgb = row(rgb_, img.y0 + y);
+        std::vector<float>& var = row(var_, img.y0 + y);
         for (int x = 0; x < img.width; ++x) {
             const size_t src = 3 * (size_t(y) * size_t(img.width) + size_t(x));
-            const size_t dst = 3 * (size_t(img.y0 + y) * size_t(width_) + size_t(img.x0 + x));
+            const size_t dst = 3 * size_t(img.x0 + x);
             for (int k = 0; k < 3; ++k) {
-                rgb_[dst + size_t(k)] = img.rgb[src + size_t(k)];
-                var_[dst + size_t(k)] = img.var.empty() ? 0.f : img.var[src + size_t(k)];
+                rgb[dst + size_t(k)] = img.rgb[src + size_t(k)];
+                var[dst + size_t(k)] = img.var.empty() ? 0.f : img.var[src + size_t(k)];
             }
         }
+    }
     bx0_ = std::min(bx0_, img.x0);
     by0_ = std::min(by0_, img.y0);
     bx1_ = std::max(bx1_, img.x0 + img.width);
@@ -95,12 +98,26 @@ ExrImage TileCanvas::image() const {
     img.height = by1_ - by0_;
     img.rgb.reserve(size_t(img.width) * size_t(img.height) * 3);
     img.var.reserve(img.rgb.capacity());
+    const size_t n = 3 * size_t(img.width);
     for (int y = by0_; y < by1_; ++y) {
-        const size_t row = 3 * (size_t(y) * size_t(width_) + size_t(bx0_));
-        img.rgb.insert(img.rgb.end(), rgb_.begin() + long(row), rgb_.begin() + long(row + 3 * size_t(img.width)));
-        img.var.insert(img.var.end(), var_.begin() + long(row), var_.begin() + long(row + 3 * size_t(img.width)));
+        const auto& r = rgb_[size_t(y)];
+        const auto& v = var_[size_t(y)];
+        if (r.empty()) {
+            img.rgb.insert(img.rgb.end(), n, 0.f);
+            img.var.insert(img.var.end(), n, 0.f);
+            continue;
+        }
+        const long a = long(3 * size_t(bx0_));
+        img.rgb.insert(img.rgb.end(), r.begin() + a, r.begin() + a + long(n));
+        img.var.insert(img.var.end(), v.begin() + a, v.begin() + a + long(n));
     }
     return img;
+}
+
+std::vector<float>& TileCanvas::row(std::vector<std::vector<float>>& rows, int y) {
+    std::vector<float>& r = rows[size_t(y)];
+    if (r.empty()) r.assign(3 * size_t(width_), 0.f);
+    return r;
 }
 
 std::vector<uint8_t> TileCanvas::encode() const {

@@ -31,7 +31,11 @@ public:
 private:
     using Key = std::tuple<uint32_t, uint32_t, uint32_t, uint32_t>;
     int width_ = 0, height_ = 0;  // display window
-    std::vector<float> rgb_, var_;  // full display window, 3 per pixel
+    // Per display-window row, 3 floats per pixel, allocated when a tile first touches the row: a
+    // tile (from the network) that claims a huge film costs only the rows it covers. Rows no tile
+    // touched read as 0.
+    std::vector<std::vector<float>> rgb_, var_;
+    std::vector<float>& row(std::vector<std::vector<float>>& rows, int y);
     int bx0_ = 0, by0_ = 0, bx1_ = 0, by1_ = 0;  // bounding box of applied rects
     std::map<Key, uint64_t> versions_;
     std::tuple<uint64_t, uint64_t, uint64_t> newest_{};  // (pass, spp, version) of the meta's tile

@@ -2,6 +2,8 @@
 // fetch image byte for byte.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "film/film.h"
 #include "job_commands.h"
 #include "test_fake_daemon.h"
@@ -91,6 +93,40 @@ TEST(TileCanvas, RefusesGarbageAndMismatchedRects) {
     moved.rect.x1 += 1;
     EXPECT_THROW(c.apply(moved), ClientError);
     EXPECT_TRUE(c.empty());
+}
+
+// Resident memory in bytes (Linux).
+long long resident_bytes() {
+    std::ifstream f("/proc/self/statm");
+    long long pages = 0, resident = 0;
+    f >> pages >> resident;
+    return resident * 4096;
+}
+
+// A tile from the network that claims the largest film the daemon allows (16384^2): the canvas
+// allocates only the rows the tile covers, not 6 GiB for the whole film (found by fuzz_tile_exr;
+// the input is in fuzz/regressions/tile_exr).
+TEST(TileCanvas, HugeFilmCostsOnlyTheTilesRows) {
+    ExrImage img;
+    img.display_width = img.display_height = 16384;
+    img.x0 = 100;
+    img.y0 = 200;
+    img.width = img.height = 2;
+    img.rgb = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+    img.var.assign(12, 0.5f);
+    const auto exr = encode_exr_image(img, ExrMeta{});
+    proto::Tile t;
+    t.id = t.job = t.pass = t.spp = t.version = 1;
+    t.rect = {100, 200, 102, 202};
+    t.exr.assign(exr.begin(), exr.end());
+    const long long before = resident_bytes();
+    TileCanvas c;
+    ASSERT_TRUE(c.apply(t));
+    EXPECT_LT(resident_bytes() - before, 64LL << 20);
+    const ExrImage out = c.image();
+    EXPECT_EQ(out.width, 2);
+    EXPECT_EQ(out.display_width, 16384);
+    EXPECT_EQ(out.rgb, img.rgb);
 }
 
 TEST(Watch, AssemblesStreamedTilesIntoTheFetchImage) {
