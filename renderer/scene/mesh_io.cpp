@@ -4,6 +4,8 @@
 #include <assimp/scene.h>
 #include <fmt/format.h>
 
+#include <mutex>
+
 #include "scene/scene_error.h"
 #include "scene/triangle_mesh.h"
 
@@ -78,11 +80,20 @@ struct Merger {
     }
 };
 
+// Debian's Assimp 5.2 writes process-global state while importing (TSan saw two omegad
+// workers' Scene::build race on a global inside libassimp during ReadFile), so imports are
+// serialised. Any thread may call load_mesh_file; it holds this lock only inside Assimp.
+std::mutex& assimp_mutex() {
+    static std::mutex m;
+    return m;
+}
+
 }  // namespace
 
 TriangleMesh load_mesh_file(const std::string& path, const SourceLoc& loc, bool flip_tex_coords) {
     std::string at = loc.key.empty() ? fmt::format("{}:{}: ", loc.file, loc.line)
                                      : fmt::format("{}:{}: {}: ", loc.file, loc.line, loc.key);
+    std::lock_guard<std::mutex> lock(assimp_mutex());
     Assimp::Importer importer;
     // No normal generation: a file without normals is shaded flat, as its author made it.
     const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
