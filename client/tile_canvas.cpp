@@ -45,8 +45,10 @@ bool TileCanvas::apply(const protocol::Tile& t) {
         throw ClientError(kExitInternal, fmt::format("tile [{}, {}, {}, {}]: its EXR covers another rectangle",
                                                      t.rect.x0, t.rect.y0, t.rect.x1, t.rect.y1));
     if (versions_.empty() && width_ == 0) {
-        if (img.display_width <= 0 || img.display_height <= 0 ||
-            (long long)img.display_width * img.display_height > (1LL << 28))
+        // The client's limits: 65536 pixels a side (a row is then at most 768 KiB) and 2^28 in
+        // all, beyond any film omegad's max_resolution lets through by default (16384 a side).
+        if (img.display_width <= 0 || img.display_height <= 0 || img.display_width > (1 << 16) ||
+            img.display_height > (1 << 16) || (long long)img.display_width * img.display_height > (1LL << 28))
             throw ClientError(kExitInternal, "tile: bad film size");
         width_ = img.display_width;
         height_ = img.display_height;
