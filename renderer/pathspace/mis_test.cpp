@@ -171,13 +171,19 @@ TEST(MisWeights, SumToOneDiffuseBoxAreaLight) {
     EXPECT_GT(c.paths, 1000);
 }
 
-TEST(MisWeights, SumToOnePointLightPinholeWithMirrors) {
+// The mirror box with a diffuse floor and a point light: L S D ... paths through chains of mirrors.
+SceneDesc mirror_box_point_light() {
     SceneDesc d = box("mirror", "white");
     LightDesc l;
     l.type = LightType::Point;
     l.position = {0.2, 0.5, 0.3};
     l.intensity = Rgb(2.f);
     d.lights.push_back(l);
+    return d;
+}
+
+TEST(MisWeights, SumToOnePointLightPinholeWithMirrors) {
+    SceneDesc d = mirror_box_point_light();
     auto c = check_scene(d, 200, 7);
     EXPECT_GT(c.paths, 500);
 }
@@ -250,15 +256,10 @@ TEST(MisWeights, SumToOneThinLens) {
 // (L S D S D D E), next to diffuse paths that every strategy shares. The lens is large so that
 // light subpaths hit it often.
 TEST(MisWeights, SumToOneThinLensPointLightMirrors) {
-    SceneDesc d = box("mirror", "white");
+    SceneDesc d = mirror_box_point_light();
     d.sensor.type = SensorType::ThinLens;
     d.sensor.aperture_radius = 0.3f;
     d.sensor.focus_distance = 1.0f;
-    LightDesc l;
-    l.type = LightType::Point;
-    l.position = {0.2, 0.5, 0.3};
-    l.intensity = Rgb(2.f);
-    d.lights.push_back(l);
     auto c = check_scene(d, 1500, 6);
     EXPECT_GT(c.paths, 500);
     EXPECT_GT(c.t0_paths, 20);

@@ -9,6 +9,7 @@
 
 #include "film/filter.h"
 #include "sampling/warp.h"
+#include "sensor/film_plane.h"
 #include "sensor/sensor.h"
 
 namespace omega {
@@ -18,15 +19,6 @@ namespace {
 Vec3 mul_point(const float* m, const Vec3& p) {
     return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
             m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
-}
-
-Vec2 plane_to_film(float qx, float qy, float ex, float ey, int w, int h) {
-    return {(1.f - qx / ex) * float(w) * 0.5f, (1.f - qy / ey) * float(h) * 0.5f};
-}
-
-// Film positions whose filter footprint reaches a crop pixel.
-bool near_crop(const Rect2i& c, Vec2 p, float r) {
-    return p.x > float(c.x0) - r && p.x < float(c.x1) + r && p.y > float(c.y0) - r && p.y < float(c.y1) + r;
 }
 
 }  // namespace
@@ -50,7 +42,7 @@ Sensor::Pdf Sensor::pdf_we(const Vec3& p_cam, const Vec3& w) const {
     if (auto* o = std::get_if<OrthographicSensor>(&model)) {
         if (wl.z < 1.f - 1e-5f) return pdf;
         Vec3 pl = Vec3(to_world.inv.point(Vec3d(p_cam)));
-        double cov = crop_coverage(plane_to_film(pl.x, pl.y, o->half_x, o->half_y, width, height));
+        double cov = crop_coverage(film_plane::to_film(pl.x, pl.y, o->half_x, o->half_y, width, height));
         if (!(cov > 0)) return pdf;
         pdf.pos = cov / a_total;
         pdf.dir = 1.0;
@@ -74,7 +66,7 @@ Sensor::Pdf Sensor::pdf_we(const Vec3& p_cam, const Vec3& w) const {
         float t = tl->focus_distance / wl.z;
         q = {(lens.x + wl.x * t) / tl->focus_distance, (lens.y + wl.y * t) / tl->focus_distance};
     }
-    double cov = crop_coverage(plane_to_film(q.x, q.y, ex, ey, width, height));
+    double cov = crop_coverage(film_plane::to_film(q.x, q.y, ex, ey, width, height));
     if (!(cov > 0)) {
         pdf.pos = 0;
         return pdf;
@@ -89,8 +81,8 @@ std::optional<Sensor::Connection> Sensor::sample_wi(const Vec3& ref, Vec2 u_lens
     Vec3 rl = Vec3(to_world.inv.point(Vec3d(ref)));  // ref in the camera's local frame
     if (auto* o = std::get_if<OrthographicSensor>(&model)) {
         if (rl.z <= 0) return std::nullopt;
-        c.film = plane_to_film(rl.x, rl.y, o->half_x, o->half_y, width, height);
-        if (!near_crop(crop, c.film, filter_radius)) return std::nullopt;
+        c.film = film_plane::to_film(rl.x, rl.y, o->half_x, o->half_y, width, height);
+        if (!film_plane::near_crop(crop, c.film, filter_radius)) return std::nullopt;
         c.p = mul_point(m, {rl.x, rl.y, 0.f});
         Vec3 d = c.p - ref;
         c.dist = length(d);
@@ -120,8 +112,8 @@ std::optional<Sensor::Connection> Sensor::sample_wi(const Vec3& ref, Vec2 u_lens
     // through the pinhole (for a pinhole, focus = 1 and the lens point is the origin).
     float t = focus / dl.z;
     Vec2 q{(lens_local.x + dl.x * t) / focus, (lens_local.y + dl.y * t) / focus};
-    c.film = plane_to_film(q.x, q.y, ex, ey, width, height);
-    if (!near_crop(crop, c.film, filter_radius)) return std::nullopt;
+    c.film = film_plane::to_film(q.x, q.y, ex, ey, width, height);
+    if (!film_plane::near_crop(crop, c.film, filter_radius)) return std::nullopt;
     c.p = mul_point(m, lens_local);
     Vec3 d = c.p - ref;
     c.dist = length(d);

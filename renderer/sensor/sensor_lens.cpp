@@ -5,6 +5,7 @@
 // so W_e = f / (A_lens a cos^4 theta) once L is integrated against cos theta dw.
 #include <cmath>
 
+#include "sensor/film_plane.h"
 #include "sensor/sensor.h"
 
 namespace omega {
@@ -33,11 +34,8 @@ std::optional<Sensor::LensHit> Sensor::intersect_lens(const Ray& r, float tmax) 
     double tf = double(tl->focus_distance) / out.z;
     double qx = (x + out.x * tf) / tl->focus_distance, qy = (y + out.y * tf) / tl->focus_distance;
     LensHit h;
-    h.film = {float((1.0 - qx / tl->tan_half_x) * width * 0.5), float((1.0 - qy / tl->tan_half_y) * height * 0.5)};
-    const float rad = filter_radius;
-    if (!(h.film.x > float(crop.x0) - rad && h.film.x < float(crop.x1) + rad && h.film.y > float(crop.y0) - rad &&
-          h.film.y < float(crop.y1) + rad))
-        return std::nullopt;
+    h.film = film_plane::to_film(float(qx), float(qy), tl->tan_half_x, tl->tan_half_y, width, height);
+    if (!film_plane::near_crop(crop, h.film, filter_radius)) return std::nullopt;
     h.p = Vec3(to_world.fwd.point(Vec3d(x, y, 0)));
     h.t = float(t);
     double cos_t = out.z / length(out);
