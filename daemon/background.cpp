@@ -8,6 +8,8 @@ Background::~Background() {
   {
     std::lock_guard lock(mutex_);
     stopping_ = true;
+    stopping_flag_.store(true);
+    tasks_.clear();
   }
   cv_.notify_all();
   thread_.join();
@@ -27,7 +29,7 @@ void Background::run() {
     {
       std::unique_lock lock(mutex_);
       cv_.wait(lock, [this] { return stopping_ || !tasks_.empty(); });
-      if (tasks_.empty()) return;
+      if (stopping_ || tasks_.empty()) return;
       task = std::move(tasks_.front());
       tasks_.pop_front();
     }

@@ -159,8 +159,25 @@ void validate_config(const Config& c) {
   if (c.auth_fail_limit < 0) bad("auth_fail_limit: must be >= 0 (0: no limit)");
   for (const auto& [user, token] : c.tcp_users)
     if (!valid_tcp_user_name(user)) bad("tcp_users: '" + user + "' is not a valid TCP user name");
-  for (const auto& r : c.allowed_roots)
+  for (const auto& r : c.allowed_roots) {
     if (!std::filesystem::path(r).is_absolute()) bad("allowed_roots: '" + r + "' is not an absolute path");
+    // A root that holds the state directory (or lies in it) would let a scene read other jobs'
+    // scenes, results, checkpoints and the asset cache.
+    std::error_code ec;
+    const auto canon = [&](const std::string& p) {
+      std::filesystem::path a = std::filesystem::weakly_canonical(std::filesystem::absolute(p, ec), ec);
+      std::string s = a.lexically_normal().string();
+      while (s.size() > 1 && s.back() == '/') s.pop_back();
+      return s;
+    };
+    const std::string root = canon(r), state = canon(c.state_dir);
+    const auto under = [](const std::string& a, const std::string& b) {  // a is b or beneath it
+      return a == b || b == "/" || (a.size() > b.size() && a.compare(0, b.size(), b) == 0 && a[b.size()] == '/');
+    };
+    if (under(state, root) || under(root, state))
+      bad("allowed_roots: '" + r + "' overlaps the state directory '" + c.state_dir +
+          "' (a scene could read other jobs' files); name folders outside it");
+  }
 }
 
 }  // namespace omega::daemon

@@ -101,7 +101,9 @@ void RenderWorker::run() {
   bool last_on_disk = false;
   try {
     SceneDesc desc = load_job_scene(spec_.paths, spec_.name, spec_.integrator, spec_.allowed_roots);
-    std::unique_ptr<Scene> scene = Scene::build(desc);
+    // Any stop, drain included, abandons a build: nothing of it is worth keeping, and a slow
+    // build must not hold up a cancel or a shutdown.
+    std::unique_ptr<Scene> scene = Scene::build(desc, [this] { return stop_requested() != StopKind::none; });
     // Path classes this integrator cannot sample go with the result like any other warning.
     for (auto& w : path_space_warnings(*scene, desc.integrator.type)) desc.warnings.push_back(std::move(w));
 

@@ -43,7 +43,7 @@ void Server::validate(Connection& c, std::uint64_t submit_id) {
       std::uint64_t asset_bytes = 0;
       for (const auto& a : s.assets) asset_bytes += a.size;
       check_scene_limits(limits, desc, asset_bytes, scene_file_name(s.name));  // before the costly build
-      std::unique_ptr<Scene> scene = Scene::build(desc);
+      std::unique_ptr<Scene> scene = Scene::build(desc, [this] { return background_.stopping(); });
       check_built_scene_memory(limits, desc, *scene, scene_file_name(s.name));
       RenderSettings rs;
       rs.threads = 1;
@@ -62,6 +62,9 @@ void Server::validate(Connection& c, std::uint64_t submit_id) {
       v.ok = true;
     } catch (const SceneError& e) {
       v.message = e.what();
+    } catch (const BuildCancelled&) {
+      v.code = ErrorCode::shutting_down;
+      v.message = "omegad is shutting down";
     } catch (const std::invalid_argument& e) {
       v.message = scene_file_name(s.name) + ":1: integrator: " + e.what();
     } catch (const std::exception& e) {
@@ -262,11 +265,13 @@ void Server::record_finish(const WorkerResult& res) {
       }
       memo_.erase(res.job);  // result.exr and the final checkpoint serve it from now on
       break;
-    case WorkerResult::Outcome::failed:
-      store_->set_outcome(res.job, JobState::failed, p, res.message);
-      publisher_.done(res.job, JobState::failed, p, res.message);
+    case WorkerResult::Outcome::failed: {
+      const std::string shown = redact_state_paths(res.message, cfg_.state_dir);  // job_info and done frames
+      store_->set_outcome(res.job, JobState::failed, p, shown);
+      publisher_.done(res.job, JobState::failed, p, shown);
       log_.error("job {}: failed: {}", res.job, res.message);
       break;
+    }
     case WorkerResult::Outcome::stopped: {
       // pause, cancel and preempt wrote their state before asking the worker to stop; a row that
       // still says running (a write lost some other way) gets the state the stop stands for.

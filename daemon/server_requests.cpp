@@ -25,7 +25,8 @@ void Server::reply_error(Connection& c, std::uint64_t id, ErrorCode code, const 
   protocol::Error e;
   e.id = id;
   e.code = code;
-  e.message = msg.size() > protocol::kMaxMessageBytes ? msg.substr(0, protocol::kMaxMessageBytes) : msg;
+  const std::string safe = redact_state_paths(msg, cfg_.state_dir);  // no daemon path reaches a client
+  e.message = safe.size() > protocol::kMaxMessageBytes ? safe.substr(0, protocol::kMaxMessageBytes) : safe;
   c.send(protocol::encode(e));
   dirty_.insert(c.id());
 }

@@ -22,6 +22,7 @@ bool is_safe_asset_name(std::string_view s) {
     if (end == std::string_view::npos) end = s.size();
     std::string_view part = s.substr(start, end - start);
     if (part.empty() || part == "." || part == "..") return false;
+    if (part.size() > 255) return false;  // NAME_MAX: the file could not be created
     start = end + 1;
   }
   return s.find('\0') == std::string_view::npos && s.find('\\') == std::string_view::npos;
@@ -68,12 +69,18 @@ Result<Submit, DecodeError> decode<Submit>(const DecodedFrame& f) {
     ref.name = a.str("name", kMaxNameBytes);
     if (a.ok() && !is_safe_asset_name(ref.name))
       a.fail(DecodeError::invalid_value, a.path_of("name"),
-             "must be a relative path without '.', '..' or empty components");
+             "must be a relative path without '.', '..' or empty components, each at most 255 bytes");
     if (a.ok() && !names.insert(ref.name).second)
       a.fail(DecodeError::invalid_value, a.path_of("name"), "'" + ref.name + "' is listed twice");
     ref.sha256 = detail::read_sha256(a, "sha256");
     ref.size = a.u64("size");
     m.assets.push_back(std::move(ref));
+  }
+  // A name that is also another's folder ("a" and "a/b.obj") cannot be both a file and a folder.
+  for (const std::string& n : names) {
+    auto it = names.lower_bound(n + "/");
+    if (r.ok() && it != names.end() && it->compare(0, n.size() + 1, n + "/") == 0)
+      r.fail(DecodeError::invalid_value, "assets", "'" + n + "' is both an asset and the folder of '" + *it + "'");
   }
   m.scene = f.payload;
   return finish_decode(r, std::move(m));

@@ -1,11 +1,21 @@
 // Mesh files through Assimp: every mesh of the file, placed by its node transforms, in one list.
+// Assimp reads nothing itself: GateIOSystem hands it each file from memory, read through the
+// scene's FileGate.
+#include <assimp/IOStream.hpp>
+#include <assimp/IOSystem.hpp>
 #include <assimp/Importer.hpp>
+#include <assimp/ProgressHandler.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
 
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
 #include <mutex>
 
+#include "io/file_gate.h"
 #include "scene/scene_error.h"
 #include "scene/triangle_mesh.h"
 
@@ -80,9 +90,102 @@ struct Merger {
     }
 };
 
+// A file's bytes as Assimp reads them. The bytes belong to the GateIOSystem, so that a stream
+// Assimp forgets to close (its glTF importer does, on some errors) costs no descriptor and, once
+// the importer is gone, none of the file's memory.
+class MemoryStream : public Assimp::IOStream {
+  public:
+    explicit MemoryStream(const std::string* bytes) : bytes_(bytes) {}
+    size_t Read(void* buffer, size_t size, size_t count) override {
+        if (size == 0) return 0;
+        const size_t n = std::min(count, (bytes_->size() - pos_) / size);
+        std::memcpy(buffer, bytes_->data() + pos_, n * size);
+        pos_ += n * size;
+        return n;
+    }
+    size_t Write(const void*, size_t, size_t) override { return 0; }
+    aiReturn Seek(size_t offset, aiOrigin origin) override {
+        size_t base = origin == aiOrigin_SET ? 0 : origin == aiOrigin_CUR ? pos_ : bytes_->size();
+        if (offset > bytes_->size() - std::min(base, bytes_->size()) && origin != aiOrigin_END) return aiReturn_FAILURE;
+        size_t to = origin == aiOrigin_END ? bytes_->size() - std::min(offset, bytes_->size()) : base + offset;
+        if (to > bytes_->size()) return aiReturn_FAILURE;
+        pos_ = to;
+        return aiReturn_SUCCESS;
+    }
+    size_t Tell() const override { return pos_; }
+    size_t FileSize() const override { return bytes_->size(); }
+    void Flush() override {}
+
+  private:
+    const std::string* bytes_;
+    size_t pos_ = 0;
+};
+
+// Every open Assimp makes goes through the gate; relative names resolve against the mesh
+// file's folder. Owned by the Assimp::Importer (it deletes its IO handler).
+class GateIOSystem : public Assimp::IOSystem {
+  public:
+    GateIOSystem(const FileGate& gate, std::string dir, const MeshFileOptions& opt) : gate_(gate), dir_(std::move(dir)), opt_(opt) {}
+
+    // A probe reads nothing, so its refusal refuses nothing (importers probe for optional files).
+    bool Exists(const char* file) const override {
+        try {
+            gate_.check(resolve(file));
+            return true;
+        } catch (const FileRefused&) {
+            return false;
+        }
+    }
+    char getOsSeparator() const override { return '/'; }
+    Assimp::IOStream* Open(const char* file, const char* mode) override {
+        if (std::strpbrk(mode, "wa+")) return nullptr;  // Assimp only reads here
+        const std::string path = resolve(file);
+        auto it = files_.find(path);
+        if (it == files_.end()) {
+            try {
+                it = files_.emplace(path, gate_.read(path)).first;
+            } catch (const FileRefused& e) {
+                note_refusal(e.what());
+                return nullptr;
+            }
+            if (opt_.on_read) opt_.on_read(path);
+        }
+        return new MemoryStream(&it->second);
+    }
+    void Close(Assimp::IOStream* stream) override { delete stream; }
+
+    // The first refusal, if any: a confined gate's refusal of any file refuses the mesh.
+    const std::string& refusal() const { return refusal_; }
+
+  private:
+    std::string resolve(const char* file) const {
+        std::filesystem::path p(file);
+        return (p.is_relative() ? std::filesystem::path(dir_) / p : p).lexically_normal().string();
+    }
+    void note_refusal(const std::string& what) {
+        if (refusal_.empty()) refusal_ = what;
+    }
+
+    const FileGate& gate_;
+    std::string dir_;
+    const MeshFileOptions& opt_;
+    std::map<std::string, std::string> files_;  // every file read, by absolute path
+    std::string refusal_;
+};
+
+// Assimp polls this while it parses; false aborts the import.
+class CancelPoll : public Assimp::ProgressHandler {
+  public:
+    explicit CancelPoll(std::function<bool()> cancelled) : cancelled_(std::move(cancelled)) {}
+    bool Update(float) override { return !(cancelled_ && cancelled_()); }
+
+  private:
+    std::function<bool()> cancelled_;
+};
+
 // Debian's Assimp 5.2 writes process-global state while importing (TSan saw two omegad
 // workers' Scene::build race on a global inside libassimp during ReadFile), so imports are
-// serialised. Any thread may call load_mesh_file; it holds this lock only inside Assimp.
+// serialised. Any thread may call load_mesh_file; it holds this lock only around the import.
 std::mutex& assimp_mutex() {
     static std::mutex m;
     return m;
@@ -90,20 +193,45 @@ std::mutex& assimp_mutex() {
 
 }  // namespace
 
-TriangleMesh load_mesh_file(const std::string& path, const SourceLoc& loc, bool flip_tex_coords) {
+TriangleMesh load_mesh_file(const FileGate& gate, const std::string& path, const SourceLoc& loc,
+                            const MeshFileOptions& opt) {
     std::string at = loc.key.empty() ? fmt::format("{}:{}: ", loc.file, loc.line)
                                      : fmt::format("{}:{}: {}: ", loc.file, loc.line, loc.key);
+    const std::string name = opt.written.empty() ? gate.shown(path) : opt.written;
+    const std::string abs = std::filesystem::absolute(path).lexically_normal().string();
+    // The mesh file itself is checked before Assimp runs, so its refusal names it as written.
+    try {
+        gate.check(abs, opt.written);
+    } catch (const FileRefused& e) {
+        throw SceneError(at + e.what());
+    }
+    // Assimp's messages may hold the path it was given: a client sees the scene's name instead.
+    auto clean = [&](std::string msg) {
+        const std::string dir = std::filesystem::path(abs).parent_path().string() + "/";
+        for (const std::string* from : {&abs, &dir})
+            for (std::size_t pos; (pos = msg.find(*from)) != std::string::npos;)
+                msg.replace(pos, from->size(), from == &abs ? name : std::string());
+        return msg;
+    };
+    // Held across Assimp's parse and its reads of regular files admitted by the gate (read
+    // whole, non-blocking): nothing under it can wait on another process.
     std::lock_guard<std::mutex> lock(assimp_mutex());
     Assimp::Importer importer;
+    auto* io = new GateIOSystem(gate, std::filesystem::path(abs).parent_path().string(), opt);
+    importer.SetIOHandler(io);  // the importer owns it
+    importer.SetProgressHandler(new CancelPoll(opt.cancelled));
     // No normal generation: a file without normals is shaded flat, as its author made it.
-    const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+    const aiScene* scene = importer.ReadFile(abs, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+    if (opt.cancelled && opt.cancelled()) throw BuildCancelled();
+    if (gate.is_confined() && !io->refusal().empty())
+        throw SceneError(fmt::format("{}mesh '{}': {}", at, name, io->refusal()));
     if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode)
-        throw SceneError(fmt::format("{}cannot load mesh '{}': {}", at, path, importer.GetErrorString()));
+        throw SceneError(fmt::format("{}cannot load mesh '{}': {}", at, name, clean(importer.GetErrorString())));
     Merger merger{scene, {}, true, {}};
-    merger.flip_v = flip_tex_coords;
+    merger.flip_v = opt.flip_tex_coords;
     merger.visit(scene->mRootNode, aiMatrix4x4(), 0);
-    if (!merger.error.empty()) throw SceneError(fmt::format("{}mesh '{}': {}", at, path, merger.error));
-    if (merger.out.indices.empty()) throw SceneError(fmt::format("{}mesh '{}' has no triangles", at, path));
+    if (!merger.error.empty()) throw SceneError(fmt::format("{}mesh '{}': {}", at, name, merger.error));
+    if (merger.out.indices.empty()) throw SceneError(fmt::format("{}mesh '{}' has no triangles", at, name));
     // Shading normals only make sense if every vertex has one.
     if (!merger.all_have_normals) merger.out.normals.clear();
     if (!merger.any_uvs) merger.out.uvs.clear();

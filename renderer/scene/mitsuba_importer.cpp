@@ -1,6 +1,5 @@
 #include "scene/mitsuba_importer.h"
 
-#include <OpenImageIO/imagebuf.h>
 #include <fmt/format.h>
 #include <pugixml.hpp>
 #include <yaml-cpp/yaml.h>
@@ -15,7 +14,10 @@
 #include <set>
 #include <sstream>
 
+#include "io/file_gate.h"
 #include "scene/param_bag.h"
+#include "scene/scene_files.h"
+#include "texture/image.h"
 #include "scene/scene_parser.h"
 
 namespace omega {
@@ -57,10 +59,6 @@ std::vector<std::string> split_numbers(const std::string& s) {
     return out;
 }
 
-float srgb_to_linear(float v) {
-    return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
-
 // An XML element being read: which of its children were used, so the rest can be named.
 struct Elem {
     pugi::xml_node node;
@@ -82,6 +80,8 @@ public:
     SceneDesc run();
 
 private:
+    const FileGate& gate() const { return opt_.files ? *opt_.files : *FileGate::unconfined(); }
+
     // ---- positions, messages
     int line_of(pugi::xml_node n) const {
         ptrdiff_t off = n.offset_debug();
@@ -303,19 +303,14 @@ Rgb Importer::texture_average(pugi::xml_node tex, const std::string& key) {
         if (auto c = find_param(e, ignored)) (void)c;  // sampling details of a texture Omega averages
     warn_unused(e);
 
-    OIIO::ImageBuf buf(p.string());
-    if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) fail(fn, key + ".filename", "cannot read '" + file + "': " + buf.geterror());
-    const OIIO::ImageSpec& spec = buf.spec();
-    const auto native = buf.nativespec().format.basetype;  // spec() says FLOAT after the converting read
-    bool srgb = !raw && (native == OIIO::TypeDesc::UINT8 || native == OIIO::TypeDesc::UINT16);
-    int nc = spec.nchannels;
-    std::vector<float> px(size_t(spec.width) * size_t(spec.height) * size_t(nc));
-    buf.get_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, px.data());
+    ImagePixels img = decode_image(gate(), p.string(), file, fmt::format("{}:{}: {}.filename: ", file_, line_of(fn), key));
+    bool srgb = !raw && !img.is_float;
+    const size_t nc = size_t(img.channels);
     double sum[3] = {0, 0, 0};
-    size_t n = size_t(spec.width) * size_t(spec.height);
+    size_t n = size_t(img.width) * size_t(img.height);
     for (size_t i = 0; i < n; ++i)
         for (int ch = 0; ch < 3; ++ch) {
-            float v = px[i * size_t(nc) + size_t(nc >= 3 ? ch : 0)];
+            float v = img.data[i * nc + (nc >= 3 ? size_t(ch) : 0)];
             sum[ch] += srgb ? srgb_to_linear(v) : v;
         }
     Rgb avg{float(sum[0] / double(n)), float(sum[1] / double(n)), float(sum[2] / double(n))};
@@ -333,9 +328,9 @@ YAML::Node Importer::bitmap(pugi::xml_node tex, const std::string& key) {
     y["type"] = "bitmap";
     pugi::xml_node fn = find_param(e, "filename");
     if (!fn) fail(tex, key, "bitmap texture needs a 'filename' string");
-    fs::path p(attr(fn, "value", key + ".filename"));
-    if (p.is_relative()) p = dir_ / p;
-    y["file"] = p.lexically_normal().string();  // the v1 parser checks that it exists
+    // As written: the v1 parser resolves it against the XML file's folder, as Mitsuba does, and
+    // checks it through the gate.
+    y["file"] = attr(fn, "value", key + ".filename");
     if (auto c = find_param(e, "filter_type")) y["filter"] = attr(c, "value", key);
     if (auto c = find_param(e, "wrap_mode")) y["wrap"] = attr(c, "value", key);
     if (auto c = find_param(e, "raw")) y["raw"] = scalar(c, key);
@@ -815,9 +810,10 @@ void Importer::read_shape(pugi::xml_node n, size_t index) {
         fs::path p(file);
         if (p.is_relative()) p = dir_ / p;
         std::error_code ec;
-        if (!fs::is_regular_file(p, ec) || !std::ifstream(p).good()) fail(fnode, key + ".filename", "cannot open '" + file + "'");
         fs::path abs = fs::absolute(p, ec);
         s.file = (ec ? p : abs).lexically_normal().string();
+        s.written = file;
+        s.file_loc = {file_, line_of(fnode), key + ".filename"};  // checked through the gate in run()
         if (auto c = find_param(e, "face_normals")) s.face_normals = attr(c, "value", key) == "true";
         if (auto c = find_param(e, "flip_tex_coords")) s.flip_tex_coords = attr(c, "value", key) != "false";
     }
@@ -913,20 +909,16 @@ void Importer::read_emitter(pugi::xml_node n, size_t index) {
         std::string file = attr(fn, "value", key);
         fs::path p(file);
         if (p.is_relative()) p = dir_ / p;
-        OIIO::ImageBuf buf(p.string());
-        if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT)) fail(fn, key + ".filename", "cannot read '" + file + "': " + buf.geterror());
-        const OIIO::ImageSpec& spec = buf.spec();
-        std::vector<float> px(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
-        buf.get_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, px.data());
+        ImagePixels img = decode_image(gate(), p.string(), file, fmt::format("{}:{}: {}.filename: ", file_, line_of(fn), key), "envmap");
+        const size_t nc = size_t(img.channels);
         // Latitude-longitude map: weight each row by sin(theta), its share of the sphere.
         double sum[3] = {0, 0, 0}, wsum = 0;
-        for (int yy = 0; yy < spec.height; ++yy) {
-            double w = std::sin((yy + 0.5) * kPi / spec.height);
-            for (int xx = 0; xx < spec.width; ++xx)
+        for (int yy = 0; yy < img.height; ++yy) {
+            double w = std::sin((yy + 0.5) * kPi / img.height);
+            for (int xx = 0; xx < img.width; ++xx)
                 for (int ch = 0; ch < 3; ++ch)
-                    sum[ch] += w * px[(size_t(yy) * size_t(spec.width) + size_t(xx)) * size_t(spec.nchannels) +
-                                      size_t(spec.nchannels >= 3 ? ch : 0)];
-            wsum += w * spec.width;
+                    sum[ch] += w * img.data[(size_t(yy) * size_t(img.width) + size_t(xx)) * nc + (nc >= 3 ? size_t(ch) : 0)];
+            wsum += w * img.width;
         }
         double scale = 1;
         if (auto c = find_param(e, "scale")) scale = number(c, key + ".scale");
@@ -1010,6 +1002,8 @@ SceneDesc Importer::run() {
     bool any_light = !desc_.lights.empty();
     for (const ShapeDesc& s : desc_.shapes) any_light |= s.emitter.has_value() && !is_black(s.emitter->radiance);
     if (!any_light) desc_.warnings.push_back(fmt::format("{}:1: the scene has no light source; the image will be black", file_));
+    desc_.files = opt_.files;
+    check_scene_files(desc_);
     return std::move(desc_);
 }
 

@@ -11,6 +11,7 @@
 // - Bad input (malformed XML, an undefined $variable, a missing mesh file, a value out of range)
 //   throws SceneError "file:line: key: what is wrong", the line taken from the XML.
 #include <map>
+#include <memory>
 #include <string>
 
 #include "scene/scene_desc.h"
@@ -20,6 +21,9 @@ namespace omega {
 struct MitsubaOptions {
     // Like `mitsuba -D name=value`: overrides the scene's <default name=... value=...>.
     std::map<std::string, std::string> defines;
+    // Every file the scene names (meshes, bitmaps, envmaps) is checked or read through this
+    // gate; null: FileGate::unconfined(). The result carries it on to Scene::build.
+    std::shared_ptr<const FileGate> files;
 };
 
 SceneDesc import_mitsuba_file(const std::string& path, const MitsubaOptions& options = {});

@@ -369,7 +369,7 @@ TEST(MitsubaImporter, ValueErrorsNameTheParameterLine) {
     EXPECT_EQ(import_error("<shape type=\"cube\"><ref id=\"missing\"/></shape>"),
               "scene.xml:2: shape[0]: reference to an unknown id 'missing'");
     EXPECT_EQ(import_error("<shape type=\"obj\">\n<string name=\"filename\" value=\"nope.obj\"/></shape>"),
-              "scene.xml:3: shape[0].filename: cannot open 'nope.obj'");
+              "scene.xml:3: shape[0].filename: cannot open 'nope.obj': No such file or directory");
 }
 
 TEST(MitsubaImporter, EmittersAndSensors) {

@@ -4,6 +4,7 @@
 // to call from any number of render threads at once.
 #include <embree3/rtcore.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -55,9 +56,11 @@ struct SceneBounds {
 
 class Scene {
 public:
-    // Loads resources and builds the BVH. Throws SceneError for bad content (degenerate
-    // meshes...) and std::runtime_error for Embree failures.
-    static std::unique_ptr<Scene> build(const SceneDesc& desc);
+    // Loads resources and builds the BVH. Every file is read through the description's
+    // FileGate (desc.files). Throws SceneError for bad content (degenerate meshes...) and
+    // std::runtime_error for Embree failures. `cancelled` is polled between resources, inside
+    // Assimp's parse and during the BVH build; when it says true, build throws BuildCancelled.
+    static std::unique_ptr<Scene> build(const SceneDesc& desc, const std::function<bool()>& cancelled = {});
     ~Scene();
     Scene(const Scene&) = delete;
     Scene& operator=(const Scene&) = delete;
@@ -84,7 +87,7 @@ public:
 
 private:
     Scene() = default;
-    void add_embree_geometry();
+    void add_embree_geometry(const std::function<bool()>& cancelled);
 
     SceneDesc desc_;
     RTCDevice device_ = nullptr;

@@ -9,7 +9,9 @@
 #include <fmt/format.h>
 
 #include "scene/scene.h"
+#include "io/file_gate.h"
 #include "scene/scene_error.h"
+#include "scene/scene_files.h"
 
 namespace omega {
 
@@ -44,7 +46,11 @@ Light make_light(const LightDesc& d) {
 
 }  // namespace
 
-std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
+std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<bool()>& cancelled) {
+    auto poll = [&] {
+        if (cancelled && cancelled()) throw BuildCancelled();
+    };
+    const FileGate& gate = scene_gate(desc);
     std::unique_ptr<Scene> s(new Scene());
     s->desc_ = desc;
     s->sensor_ = Sensor::from_desc(desc.sensor);
@@ -54,7 +60,10 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
     std::map<std::pair<std::string, bool>, std::shared_ptr<const Image>> images;  // (file, raw)
     auto texture_for = [&](const BitmapDesc& bd) -> const BitmapTexture* {
         auto& img = images[{bd.file, bd.raw}];
-        if (!img) img = load_image(bd.file, bd.raw, fmt::format("{}: {}: ", where(bd.loc), bd.loc.key));
+        if (!img) {
+            poll();
+            img = load_image(gate, bd.file, bd.raw, fmt::format("{}: {}: ", where(bd.loc), bd.loc.key), bd.written);
+        }
         auto tex = std::make_unique<BitmapTexture>();
         tex->image = img;
         tex->filter = bd.filter;
@@ -89,6 +98,7 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
     s->shapes_.reserve(desc.shapes.size());
     for (size_t i = 0; i < desc.shapes.size(); ++i) {
         const ShapeDesc& sd = desc.shapes[i];
+        poll();
         Shape sh;
         sh.name = fmt::format("shapes[{}]", i);
         sh.material = material_for(sd, i);
@@ -115,7 +125,10 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
         } else {
             sh.kind = ShapeKind::Triangles;
             switch (sd.type) {
-                case ShapeType::Mesh: sh.mesh = load_mesh_file(sd.file, sd.loc, sd.flip_tex_coords); break;
+                case ShapeType::Mesh:
+                    sh.mesh = load_mesh_file(gate, sd.file, sd.file_loc.file.empty() ? sd.loc : sd.file_loc,
+                                             MeshFileOptions{sd.flip_tex_coords, sd.written, cancelled, {}});
+                    break;
                 case ShapeType::Rectangle: sh.mesh = make_rectangle(); break;
                 case ShapeType::Cube: sh.mesh = make_cube(); break;
                 case ShapeType::Disk: sh.mesh = make_disk(); break;
@@ -160,7 +173,8 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
         s->lights_.push_back(l);
     }
 
-    s->add_embree_geometry();
+    poll();
+    s->add_embree_geometry(cancelled);
 
     std::vector<double> power;
     for (const Light& l : s->lights_) power.push_back(light_power(*s, l));
@@ -168,7 +182,7 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc) {
     return s;
 }
 
-void Scene::add_embree_geometry() {
+void Scene::add_embree_geometry(const std::function<bool()>& cancelled) {
     device_ = rtcNewDevice(nullptr);
     if (!device_) throw std::runtime_error("embree: cannot create a device");
     rtc_ = rtcNewScene(device_);
@@ -200,8 +214,16 @@ void Scene::add_embree_geometry() {
         rtcAttachGeometryByID(rtc_, g, unsigned(i));
         rtcReleaseGeometry(g);
     }
+    if (cancelled) {
+        // Embree calls this from its build threads; returning false abandons the build.
+        rtcSetSceneProgressMonitorFunction(
+            rtc_, [](void* ptr, double) { return !(*static_cast<const std::function<bool()>*>(ptr))(); },
+            const_cast<std::function<bool()>*>(&cancelled));
+    }
     rtcCommitScene(rtc_);
+    if (cancelled && cancelled()) throw BuildCancelled();
     if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) throw std::runtime_error("embree: scene build failed");
+    if (cancelled) rtcSetSceneProgressMonitorFunction(rtc_, nullptr, nullptr);
 }
 
 }  // namespace omega

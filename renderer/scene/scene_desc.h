@@ -4,6 +4,7 @@
 // Every entry keeps the file and line it came from so later errors can point back at it.
 #include <array>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -14,6 +15,8 @@
 #include "texture/texture_types.h"
 
 namespace omega {
+
+class FileGate;
 
 struct SourceLoc {
     std::string file;
@@ -78,8 +81,8 @@ struct SensorDesc {
     SourceLoc loc;
 };
 
-// A `{type: bitmap, file: ...}` value: Mitsuba's bitmap texture. The file is checked to exist at
-// parse time and decoded when a shape's material needs it (Scene::build).
+// A `{type: bitmap, file: ...}` value: Mitsuba's bitmap texture. The file is checked through the
+// scene's FileGate at parse time and decoded when a shape's material needs it (Scene::build).
 struct BitmapDesc {
     std::string file;  // absolute path
     TexFilter filter = TexFilter::Bilinear;
@@ -87,6 +90,8 @@ struct BitmapDesc {
     bool raw = false;  // false: 8/16-bit data is sRGB-decoded to linear
     UvTransform to_uv;
     SourceLoc loc;     // of the bitmap mapping, for load errors
+    std::string written;  // the file as the scene wrote it, for messages
+    SourceLoc file_loc;   // of the file value itself (key "....file")
 };
 
 struct MaterialDesc {
@@ -109,7 +114,7 @@ struct ShapeDesc {
     ShapeType type = ShapeType::Rectangle;
     std::string name;          // optional, for messages (Mitsuba's id)
     Mat4 to_world;
-    std::string file;          // mesh: absolute path, checked to exist at parse time
+    std::string file;          // mesh: absolute path, checked through the FileGate at parse time
     Vec3d center{0, 0, 0};     // sphere: in addition to to_world
     double radius = 1.0;       // sphere
     std::string material;      // key into SceneDesc::materials
@@ -119,6 +124,8 @@ struct ShapeDesc {
     bool drop_degenerate = false;    // mesh: skip zero-area triangles instead of failing
     bool flip_tex_coords = true;     // mesh: v' = 1 - v (Mitsuba's default for OBJ and PLY)
     SourceLoc loc;
+    std::string written;  // mesh: the file as the scene wrote it, for messages
+    SourceLoc file_loc;   // mesh: of the file value itself
 };
 
 enum class LightType { Point, Spot, Directional, Constant };
@@ -144,6 +151,9 @@ struct SceneDesc {
     std::vector<ShapeDesc> shapes;
     std::vector<LightDesc> lights;
     std::vector<std::string> warnings;  // things the parser accepted but wants the user to know
+    // Who may open what: every file the scene names is checked through it at parse time and
+    // read through it by Scene::build. Null: FileGate::unconfined().
+    std::shared_ptr<const FileGate> files;
 };
 
 }  // namespace omega

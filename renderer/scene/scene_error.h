@@ -10,4 +10,10 @@ struct SceneError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+// Scene::build stopped because its caller asked (a cancelled or shut-down job); not an error
+// of the scene.
+struct BuildCancelled : std::runtime_error {
+    BuildCancelled() : std::runtime_error("the scene build was cancelled") {}
+};
+
 }  // namespace omega

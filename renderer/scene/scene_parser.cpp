@@ -1,4 +1,5 @@
 #include "scene/scene_parser.h"
+#include "scene/scene_files.h"
 
 #include <fmt/format.h>
 
@@ -197,21 +198,25 @@ float parse_ior(ParamBag& b, const std::string& key, float def) {
     return x;
 }
 
-// A file named relative to the scene file's folder, checked to be readable; returns the normalised
-// absolute path. (The folder comes from the value's file name, as the parser was given it.)
-std::string existing_file(const ParamValue& fv) {
+// A file named relative to the scene file's folder: its normalised absolute path, the name as
+// written and the value's location. Nothing is opened here: check_scene_files() checks every
+// file through the scene's FileGate once the whole scene is parsed.
+struct NamedFile {
+    std::string file, written;
+    SourceLoc loc;
+};
+NamedFile scene_file(const ParamValue& fv) {
     std::string file = fv.as_string();
     if (file.empty()) fv.fail("must not be empty");
+    if (file.find('\0') != std::string::npos) fv.fail("must not contain a NUL byte");
     fs::path p(file);
     if (p.is_relative()) {
         fs::path dir = fs::path(fv.file()).parent_path();
         p = (dir.empty() ? fs::path(".") : dir) / p;
     }
     std::error_code ec;
-    bool ok = fs::is_regular_file(p, ec) && std::ifstream(p).good();
-    if (!ok) fv.fail("cannot open '" + file + "'");
     fs::path abs = fs::absolute(p, ec);
-    return (ec ? p : abs).lexically_normal().string();
+    return {(ec ? p : abs).lexically_normal().string(), file, fv.loc()};
 }
 
 // Two numbers, [a, b], or one number for both when `single_ok`.
@@ -273,7 +278,10 @@ BitmapDesc parse_bitmap(const ParamValue& v) {
     BitmapDesc t;
     t.loc = v.loc();
     ParamBag::enum_value<int>(b.require("type"), {{"bitmap", 0}});
-    t.file = existing_file(b.require("file"));
+    NamedFile f = scene_file(b.require("file"));
+    t.file = f.file;
+    t.written = f.written;
+    t.file_loc = f.loc;
     t.filter = b.get_enum<TexFilter>("filter", {{"bilinear", TexFilter::Bilinear}, {"nearest", TexFilter::Nearest}},
                                      t.filter);
     t.wrap = b.get_enum<TexWrap>("wrap", {{"repeat", TexWrap::Repeat}, {"mirror", TexWrap::Mirror}, {"clamp", TexWrap::Clamp}},
@@ -459,7 +467,10 @@ ShapeDesc parse_shape(const ParamValue& item, size_t index, ShapeCtx& ctx) {
     s.name = b.get_string("name", "");
     if (auto v = b.get("to_world")) s.to_world = parse_to_world(*v);
     if (s.type == ShapeType::Mesh) {
-        s.file = existing_file(b.require("file"));
+        NamedFile f = scene_file(b.require("file"));
+        s.file = f.file;
+        s.written = f.written;
+        s.file_loc = f.loc;
         s.face_normals = b.get_bool("face_normals", false);
         s.drop_degenerate = b.get_bool("drop_degenerate", false);
         s.flip_tex_coords = b.get_bool("flip_tex_coords", true);
@@ -606,7 +617,8 @@ EmitterDesc parse_emitter_value(const ParamValue& v) { return parse_emitter(Para
 
 LightDesc parse_light_value(const ParamValue& v) { return parse_light(v); }
 
-SceneDesc parse_scene_string(const std::string& yaml, const std::string& virtual_path) {
+SceneDesc parse_scene_string(const std::string& yaml, const std::string& virtual_path,
+                             std::shared_ptr<const FileGate> files) {
     YAML::Node root;
     try {
         root = YAML::Load(yaml);
@@ -616,7 +628,10 @@ SceneDesc parse_scene_string(const std::string& yaml, const std::string& virtual
     fs::path dir = fs::path(virtual_path).parent_path();
     if (dir.empty()) dir = ".";
     try {
-        return parse_root(root, virtual_path, dir);
+        SceneDesc desc = parse_root(root, virtual_path, dir);
+        desc.files = std::move(files);
+        check_scene_files(desc);
+        return desc;
     } catch (const YAML::Exception& e) {
         // Should not happen (the bag checks node kinds first), but a library quirk must not escape
         // as anything other than a scene error.

@@ -1,7 +1,9 @@
 #pragma once
 // Scene format v1 (YAML) -> SceneDesc. See docs/scene-format.md for every key.
-// Throws SceneError "file:line: key: what is wrong" for any bad input; never loads meshes, but
-// checks that mesh files exist so that the error points at the scene line.
+// Throws SceneError "file:line: key: what is wrong" for any bad input; never loads meshes or
+// textures, but checks every file they name through the FileGate (regular, readable, and beneath
+// the gate's roots when confined), so that the error points at the scene line.
+#include <memory>
 #include <string>
 
 #include "math/transform.h"
@@ -11,8 +13,10 @@
 namespace omega {
 
 SceneDesc parse_scene_file(const std::string& path);
-// `virtual_path` names the text in messages; relative mesh paths resolve against its folder.
-SceneDesc parse_scene_string(const std::string& yaml, const std::string& virtual_path);
+// `virtual_path` names the text in messages; relative file names resolve against its folder.
+// `files` governs every file the scene names (null: unconfined); the result carries it.
+SceneDesc parse_scene_string(const std::string& yaml, const std::string& virtual_path,
+                             std::shared_ptr<const FileGate> files = nullptr);
 
 // A `to_world` value: {matrix: [...]}, {look_at: {...}}, a single translate/rotate/scale mapping,
 // or a list of those applied in order (the first to the points first). Checks that the result is

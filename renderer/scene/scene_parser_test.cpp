@@ -334,11 +334,11 @@ TEST(SceneParser, MissingMeshFile) {
                        "    file: meshes/x.obj\n";
     std::string path = dir.write("scene.yaml", yaml).string();
     EXPECT_EQ(scene_error_of([&] { parse_scene_file(path); }),
-              path + ":7: shapes[3].file: cannot open 'meshes/x.obj'");
+              path + ":7: shapes[3].file: cannot open 'meshes/x.obj': No such file or directory");
     // A folder is not a mesh file either.
     std::filesystem::create_directories(dir.path / "meshes/x.obj");
     EXPECT_EQ(scene_error_of([&] { parse_scene_file(path); }),
-              path + ":7: shapes[3].file: cannot open 'meshes/x.obj'");
+              path + ":7: shapes[3].file: cannot open 'meshes/x.obj': not a regular file");
     EXPECT_EQ(scene_error_of([&] { parse_scene_file((dir.path / "nope.yaml").string()); }),
               (dir.path / "nope.yaml").string() + ": cannot open the scene file");
 }

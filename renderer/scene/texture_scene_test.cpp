@@ -84,9 +84,7 @@ TEST(TextureScene, UndecodableFileIsASceneErrorAtBuild) {
     SceneDesc d = f.parse("materials:\n  m: {type: diffuse, reflectance: {type: bitmap, file: textures/junk.png}}\n"
                           "shapes:\n  - {type: rectangle, material: m}\n");
     std::string e = scene_error_of([&] { Scene::build(d); });
-    EXPECT_NE(e.find("scene.yaml:4: materials.m.reflectance: cannot read texture '" +
-                     (f.dir.path / "textures/junk.png").lexically_normal().string() + "'"),
-              std::string::npos)
+    EXPECT_NE(e.find("scene.yaml:4: materials.m.reflectance: cannot read texture 'textures/junk.png': "), std::string::npos)
         << e;
 }
 

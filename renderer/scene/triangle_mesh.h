@@ -1,6 +1,7 @@
 #pragma once
 // Triangle geometry as loaded or generated, before it is handed to Embree.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,8 @@
 #include "scene/scene_desc.h"
 
 namespace omega {
+
+class FileGate;
 
 struct TriangleMesh {
     std::vector<Vec3> positions;
@@ -30,11 +33,24 @@ TriangleMesh make_disk(int segments = 64); // unit disk in z = 0, normal +z
 // Mitsuba's disk uv from the object-space point: (radius, angle / 2 pi in [0, 1)).
 Vec2 disk_uv(Vec2 local_xy);
 
+struct MeshFileOptions {
+    // Mitsuba's default, true: turns the files' v-up convention into the textures' v-down one.
+    bool flip_tex_coords = true;
+    std::string written;  // the file as the scene wrote it, for messages
+    // Polled while Assimp parses; true aborts the import with BuildCancelled.
+    std::function<bool()> cancelled;
+    // Called with the absolute path of every file read, the mesh file first (the client's
+    // asset scan learns an OBJ's mtllib or a glTF's buffers this way).
+    std::function<void(const std::string&)> on_read;
+};
+
 // Loads OBJ, PLY or glTF through Assimp (all meshes in the file merged, triangulated), with the
-// first uv channel if the file has one. flip_tex_coords (Mitsuba's default, true) turns the
-// files' v-up convention into the textures' v-down one: v' = 1 - v.
+// first uv channel if the file has one. Every file Assimp opens, the mesh file and whatever it
+// names inside itself, is read through `gate`. A confined gate's refusal of any of them refuses
+// the mesh; an unconfined one lets Assimp carry on without it (as it does for a missing .mtl).
 // Throws SceneError naming `loc` and the file on failure.
-TriangleMesh load_mesh_file(const std::string& path, const SourceLoc& loc, bool flip_tex_coords = true);
+TriangleMesh load_mesh_file(const FileGate& gate, const std::string& path, const SourceLoc& loc,
+                            const MeshFileOptions& options = {});
 
 // Applies to_world (normals by the inverse transpose, in double), flips normals if asked, and
 // validates: non-finite positions and zero-area triangles are errors naming the shape and the

@@ -1,3 +1,4 @@
+#include "io/file_gate.h"
 #include "scene/triangle_mesh.h"
 
 #include <gtest/gtest.h>
@@ -96,7 +97,7 @@ TEST(TriangleMesh, LoadObj) {
     auto p = dir.write("quads.obj",
                        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1 0 -1\nv 1 1 -1\n"
                        "f 1 2 3 4\nf 2 5 6 3\n");
-    TriangleMesh m = load_mesh_file(p.string(), {});
+    TriangleMesh m = load_mesh_file(*FileGate::unconfined(), p.string(), {});
     EXPECT_EQ(m.triangle_count(), 4u);
     EXPECT_TRUE(m.normals.empty());  // the file has none and none are made up
     bake_mesh(m, xf(Mat4::translate({10, 0, 0})), false, false, {}, "quads");
@@ -106,7 +107,7 @@ TEST(TriangleMesh, LoadObj) {
     EXPECT_EQ(max_x, 11.f);
 
     auto pn = dir.write("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n");
-    TriangleMesh n = load_mesh_file(pn.string(), {});
+    TriangleMesh n = load_mesh_file(*FileGate::unconfined(), pn.string(), {});
     ASSERT_EQ(n.normals.size(), n.positions.size());
     EXPECT_EQ(n.normals[0], (Vec3{0, 0, 1}));
 }
@@ -117,7 +118,7 @@ TEST(TriangleMesh, LoadPly) {
                        "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
                        "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
                        "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n4 0 1 2 3\n3 0 3 4\n");
-    TriangleMesh m = load_mesh_file(p.string(), {});
+    TriangleMesh m = load_mesh_file(*FileGate::unconfined(), p.string(), {});
     EXPECT_EQ(m.triangle_count(), 3u);
     bake_mesh(m, xf(Mat4::scale({2, 2, 2})), false, false, {}, "ply");
     bool found = false;
@@ -144,7 +145,7 @@ TEST(TriangleMesh, LoadGltfAppliesNodeTransforms) {
   {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
   {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]
 })");
-    TriangleMesh m = load_mesh_file(p.string(), {});
+    TriangleMesh m = load_mesh_file(*FileGate::unconfined(), p.string(), {});
     ASSERT_EQ(m.triangle_count(), 2u);  // one mesh, instanced by two nodes
     bake_mesh(m, xf(Mat4::identity()), false, false, {}, "gltf");
     std::vector<Vec3> first = {m.positions[m.indices[0]], m.positions[m.indices[1]], m.positions[m.indices[2]]};
@@ -163,7 +164,7 @@ TEST(TriangleMesh, DegenerateTrianglesNameSceneLineShapeAndTriangle) {
     SceneDesc d = parse_scene_file(path);
     const ShapeDesc& s = d.shapes[2];
     EXPECT_EQ(s.loc.key, "shapes[2]");
-    TriangleMesh m = load_mesh_file(s.file, s.loc);
+    TriangleMesh m = load_mesh_file(*FileGate::unconfined(), s.file, s.loc);
     ASSERT_EQ(m.triangle_count(), 3u);
     TriangleMesh copy = m;
     EXPECT_EQ(scene_error_of([&] { bake_mesh(copy, xf(s.to_world), false, false, s.loc, "mesh 'x.obj'"); }),
@@ -181,8 +182,9 @@ TEST(TriangleMesh, LoadErrors) {
     TempDir dir;
     SourceLoc loc{"scene.yaml", 9, "shapes[0]"};
     auto garbage = dir.write("bad.obj", "this is not an obj file\n");
-    std::string e = scene_error_of([&] { load_mesh_file(garbage.string(), loc); });
+    std::string e = scene_error_of([&] { load_mesh_file(*FileGate::unconfined(), garbage.string(), loc); });
     EXPECT_EQ(e.rfind("scene.yaml:9: shapes[0]: ", 0), 0u) << e;
-    e = scene_error_of([&] { load_mesh_file((dir.path / "missing.ply").string(), loc); });
-    EXPECT_EQ(e.rfind("scene.yaml:9: shapes[0]: cannot load mesh", 0), 0u) << e;
+    e = scene_error_of([&] { load_mesh_file(*FileGate::unconfined(), (dir.path / "missing.ply").string(), loc); });
+    EXPECT_EQ(e.rfind("scene.yaml:9: shapes[0]: cannot open '", 0), 0u) << e;
+    EXPECT_NE(e.find("No such file or directory"), std::string::npos) << e;
 }

@@ -1,4 +1,5 @@
 // Texture lookups against hand-computed values, and image decoding against the sRGB closed form.
+#include "io/file_gate.h"
 #include "texture/bitmap_texture.h"
 
 #include <gtest/gtest.h>
@@ -96,13 +97,13 @@ TEST(Image, EightBitIsSrgbDecodedUnlessRaw) {
     std::vector<uint8_t> px = {0, 10, 128, 255, 200, 3, 64, 32, 16, 90, 180, 250};  // 2 x 2 RGB
     auto path = (dir.path / "t.png").string();
     test::write_image_u8(path, 2, 2, 3, px);
-    auto img = load_image(path, false, "");
+    auto img = load_image(*FileGate::unconfined(), path, false, "");
     ASSERT_EQ(img->width, 2);
     ASSERT_EQ(img->height, 2);
     for (size_t i = 0; i < 4; ++i)
         for (int c = 0; c < 3; ++c)
             EXPECT_NEAR(img->texels[i][c], test::srgb8_to_linear(px[3 * i + size_t(c)]), 2e-6) << i << " " << c;
-    auto raw = load_image(path, true, "");
+    auto raw = load_image(*FileGate::unconfined(), path, true, "");
     for (size_t i = 0; i < 4; ++i)
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(raw->texels[i][c], px[3 * i + size_t(c)] / 255.0, 1e-6);
     // Row 0 is the top row as written.
@@ -115,11 +116,11 @@ TEST(Image, GreyIsReplicatedAndAlphaIgnored) {
     auto grey = (dir.path / "g.png").string(), rgba = (dir.path / "a.png").string();
     test::write_image_u8(grey, 1, 1, 1, {128});
     test::write_image_u8(rgba, 1, 1, 4, {255, 0, 128, 7});
-    Rgb g = load_image(grey, false, "")->texels[0];
+    Rgb g = load_image(*FileGate::unconfined(), grey, false, "")->texels[0];
     EXPECT_EQ(g.x, g.y);
     EXPECT_EQ(g.x, g.z);
     EXPECT_NEAR(g.x, test::srgb8_to_linear(128), 2e-6);
-    Rgb a = load_image(rgba, false, "")->texels[0];
+    Rgb a = load_image(*FileGate::unconfined(), rgba, false, "")->texels[0];
     EXPECT_NEAR(a.z, test::srgb8_to_linear(128), 2e-6);
 }
 
@@ -127,7 +128,7 @@ TEST(Image, FloatIsLinearAndClampedToOne) {
     TempDir dir;
     auto path = (dir.path / "t.exr").string();
     test::write_image_f32(path, 2, 1, 3, {0.3f, 0.02f, 0.7f, 5.f, 0.f, 1.f});
-    auto img = load_image(path, false, "");
+    auto img = load_image(*FileGate::unconfined(), path, false, "");
     EXPECT_FLOAT_EQ(img->texels[0].x, 0.3f);  // not decoded, even with raw = false
     EXPECT_FLOAT_EQ(img->texels[0].y, 0.02f);
     EXPECT_FLOAT_EQ(img->texels[1].x, 1.f);   // a reflectance cannot exceed 1
@@ -136,14 +137,14 @@ TEST(Image, FloatIsLinearAndClampedToOne) {
 TEST(Image, BadFilesAreSceneErrorsNamingTheFile) {
     TempDir dir;
     auto junk = dir.write("junk.png", "this is not a png").string();
-    std::string e = scene_error_of([&] { load_image(junk, false, "s.yaml:3: materials.m.reflectance: "); });
+    std::string e = scene_error_of([&] { load_image(*FileGate::unconfined(), junk, false, "s.yaml:3: materials.m.reflectance: "); });
     EXPECT_NE(e.find("s.yaml:3: materials.m.reflectance: cannot read texture '" + junk + "'"), std::string::npos) << e;
     std::string missing = (dir.path / "missing.png").string();
-    e = scene_error_of([&] { load_image(missing, false, ""); });
-    EXPECT_NE(e.find("cannot read texture '" + missing + "'"), std::string::npos) << e;
+    e = scene_error_of([&] { load_image(*FileGate::unconfined(), missing, false, ""); });
+    EXPECT_NE(e.find("cannot open '" + missing + "': No such file"), std::string::npos) << e;
     auto nan = (dir.path / "nan.exr").string();
     test::write_image_f32(nan, 1, 1, 3, {0.5f, std::nanf(""), 0.5f});
-    e = scene_error_of([&] { load_image(nan, false, ""); });
+    e = scene_error_of([&] { load_image(*FileGate::unconfined(), nan, false, ""); });
     EXPECT_NE(e.find("must be finite"), std::string::npos) << e;
 }
 

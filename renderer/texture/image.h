@@ -8,6 +8,8 @@
 
 namespace omega {
 
+class FileGate;
+
 struct Image {
     int width = 0, height = 0;
     std::vector<Rgb> texels;  // row-major; row 0 is the first row stored in the file (its top)
@@ -17,11 +19,28 @@ struct Image {
 // The sRGB transfer function, inverted (IEC 61966-2-1), as Mitsuba decodes 8-bit textures.
 float srgb_to_linear(float encoded);
 
-// Loads `path` through OpenImageIO. Integer pixel data (8- and 16-bit PNG, JPEG, ...) is
+// An image file's pixels as stored, converted to float: `channels` values a texel, row-major,
+// the top row first.
+struct ImagePixels {
+    int width = 0, height = 0, channels = 0;
+    bool is_float = false;  // the file stores float data (EXR, HDR, PFM): linear, not sRGB
+    std::vector<float> data;
+};
+
+// Reads `path` through `gate` into memory and decodes it there: OpenImageIO gets an in-memory
+// proxy and never a path of its own, so no image reader can open anything the gate did not
+// admit. The format comes from the file's magic bytes, else its extension. At most 2^26
+// texels (8192 x 8192), checked before any pixel is decoded. Messages name the file as
+// `written` (or the gate shows it). Throws SceneError "<where>cannot read <what> '<name>': <why>".
+ImagePixels decode_image(const FileGate& gate, const std::string& path, const std::string& written,
+                         const std::string& where, const std::string& what = "image");
+
+// Loads a texture. Integer pixel data (8- and 16-bit PNG, JPEG, ...) is
 // sRGB-encoded and decoded to linear unless `raw`; float data (EXR, HDR) is linear as stored.
 // One channel is grey; a second or fourth (alpha) channel is ignored. Because every image is a
 // reflectance, values are clamped to [0, 1]; a NaN, an infinity or a negative value is an error.
-// Throws SceneError "<where>cannot read texture '<path>': <why>" on any failure.
-std::shared_ptr<const Image> load_image(const std::string& path, bool raw, const std::string& where);
+// Throws SceneError "<where>cannot read texture '<name>': <why>" on any failure.
+std::shared_ptr<const Image> load_image(const FileGate& gate, const std::string& path, bool raw, const std::string& where,
+                                        const std::string& written = {});
 
 }  // namespace omega

@@ -99,7 +99,7 @@ def test_bad_scenes_and_assets(tmp, daemons):
     for path in (b"/etc/hostname", b"../../../../../../etc/hostname"):
         h = c.submit(mesh.replace(b"meshes/m.obj", path), name="escape")
         assert h["type"] == "error" and h["code"] == "scene_invalid", h
-        assert "neither a submitted asset nor under an allowed root" in h["message"], h
+        assert "is not a submitted asset or a regular file under an allowed root" in h["message"], h
     # Wrong hash: the bytes sent are not the ones announced.
     obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
     sid = c.new_id()
