@@ -12,7 +12,9 @@
 
 #include "client_error.h"
 #include "scene/scene_error.h"
+#include "io/file_gate.h"
 #include "scene/scene_parser.h"
+#include "scene/triangle_mesh.h"
 
 namespace omega::client {
 
@@ -118,8 +120,45 @@ ScannedScene scan_scene(const std::string& scene_path) {
     bool rewritten = false;
     std::map<std::string, size_t> by_name;
     // One `file:` of a mesh shape or a bitmap texture: hashed, and renamed when not a clean relative path.
+    auto add = [&](ScannedAsset a) {
+        if (auto it = by_name.find(a.name); it != by_name.end()) return;  // same file twice
+        by_name[a.name] = s.assets.size();
+        s.assets.push_back(std::move(a));
+    };
+    // The files a mesh names inside itself (an OBJ's mtllib, a glTF's buffers) travel beside it,
+    // under the same relative names: the daemon's loader reads only submitted files.
+    auto take_inner = [&](const ScannedAsset& mesh, const std::string& written) {
+        const fs::path mesh_dir = fs::path(mesh.path).parent_path();
+        const fs::path name_dir = fs::path(mesh.name).parent_path();
+        std::vector<std::string> inner;
+        MeshFileOptions opt;
+        opt.written = written;
+        opt.on_read = [&](const std::string& p) {
+            if (p != fs::path(mesh.path).lexically_normal().string()) inner.push_back(p);
+        };
+        try {
+            (void)load_mesh_file(*FileGate::unconfined(), mesh.path, {scene_path, 0, ""}, opt);
+        } catch (const SceneError&) {
+            // omegad reports a bad mesh with the scene's line; nothing more to send for it
+        }
+        for (const std::string& p : inner) {
+            const std::string rel = fs::path(p).lexically_relative(mesh_dir).generic_string();
+            if (!clean_relative(rel)) {
+                s.warnings.push_back(fmt::format("{}: mesh '{}' names '{}' outside its own folder; it is not sent, and "
+                                                 "omegad will refuse the mesh",
+                                                 scene_path, written, p));
+                continue;
+            }
+            ScannedAsset a;
+            a.path = p;
+            a.sha256 = sha256_file(p, &a.size);
+            a.name = (name_dir / rel).generic_string();
+            add(std::move(a));
+        }
+    };
     auto take = [&](YAML::Node holder) {
         if (!holder.IsMap() || !holder["file"] || !holder["file"].IsScalar()) return;
+        const bool mesh = holder["type"] && holder["type"].IsScalar() && holder["type"].as<std::string>() == "mesh";
         const std::string written = holder["file"].as<std::string>();
         fs::path p(written);
         if (p.is_relative()) p = dir / p;
@@ -133,9 +172,8 @@ ScannedScene scan_scene(const std::string& scene_path) {
             holder["file"] = a.name;
             rewritten = true;
         }
-        if (auto it = by_name.find(a.name); it != by_name.end()) return;  // same file twice
-        by_name[a.name] = s.assets.size();
-        s.assets.push_back(std::move(a));
+        if (mesh) take_inner(a, written);
+        add(std::move(a));
     };
     // Textures: the reflectance of a named or an inline material.
     auto take_material = [&](YAML::Node m) {

@@ -1,6 +1,7 @@
 // submit, status, list, cancel, fetch and connection failures against a scripted fake daemon.
 #include <gtest/gtest.h>
 
+#include <map>
 #include <mutex>
 
 #include "asset_scan.h"
@@ -104,6 +105,27 @@ TEST(AssetScan, BitmapTexturesTravelAsAssets) {
     EXPECT_EQ(s.assets[0].sha256, sha256_bytes("png bytes"));
     EXPECT_EQ(s.assets[1].name, "assets/" + sha256_bytes("other bytes").substr(0, 16) + "/stone.png");
     EXPECT_EQ(s.yaml.find("../shared"), std::string::npos) << s.yaml;
+}
+
+TEST(AssetScan, FilesAMeshNamesTravelBesideIt) {
+    TempDir d;
+    d.write("scene/meshes/m.obj", std::string("mtllib m.mtl\n") + kTri);
+    d.write("scene/meshes/m.mtl", "newmtl a\nKd 1 0 0\n");
+    d.write("shared/o.obj", std::string("mtllib o.mtl\n") + kTri);
+    d.write("shared/o.mtl", "newmtl b\nKd 0 1 0\n");
+    d.write("scene/far.obj", std::string("mtllib ../shared/o.mtl\n") + kTri);
+    const auto scene = d.write("scene/s.yaml", "omega: 1\nshapes:\n  - {type: mesh, file: meshes/m.obj}\n"
+                                               "  - {type: mesh, file: ../shared/o.obj}\n  - {type: mesh, file: far.obj}\n");
+    ScannedScene s = scan_scene(scene.string());
+    std::map<std::string, std::string> by_name;
+    for (const auto& a : s.assets) by_name[a.name] = a.sha256;
+    EXPECT_EQ(by_name.at("meshes/m.mtl"), sha256_bytes("newmtl a\nKd 1 0 0\n"));
+    const std::string o = "assets/" + sha256_bytes(std::string("mtllib o.mtl\n") + kTri).substr(0, 16) + "/";
+    EXPECT_EQ(by_name.at(o + "o.mtl"), sha256_bytes("newmtl b\nKd 0 1 0\n"));  // beside its renamed mesh
+    // An mtllib outside the mesh's own folder cannot keep its relative name: not sent, and said.
+    EXPECT_EQ(by_name.count("shared/o.mtl"), 0u);
+    ASSERT_FALSE(s.warnings.empty());
+    EXPECT_NE(s.warnings.back().find("mesh 'far.obj' names"), std::string::npos) << s.warnings.back();
 }
 
 TEST(Remote, UnreachableDaemonExits3NamingTheAddress) {

@@ -107,11 +107,19 @@ TEST(Messages, FieldValidation) {
   EXPECT_EQ(code_of(R"({"type": "submit", "id": 1, "name": "", "priority": 0, "halt": 5, "seed": 0, "assets": []})"), DecodeError::wrong_type);
   EXPECT_EQ(code_of(R"({"type": "submit", "id": 1, "name": "", "priority": 0, "halt": {}, "seed": 0, "integrator": "Path!", "assets": []})"), DecodeError::invalid_value);
   const std::string sha(64, 'a');
-  for (std::string bad : {"/etc/passwd", "../x", "a/../b", "a//b", "a/", "./a"}) {
+  for (std::string bad : std::vector<std::string>{"/etc/passwd", "../x", "a/../b", "a//b", "a/", "./a", std::string(256, 'a') + "/m.obj"}) {
     std::string h = R"({"type": "submit", "id": 1, "name": "", "priority": 0, "halt": {}, "seed": 0, "assets": [{"name": ")" +
                     bad + R"(", "sha256": ")" + sha + R"(", "size": 1}]})";
     EXPECT_EQ(code_of(h), DecodeError::invalid_value) << bad;
   }
+  // A component of 255 bytes is a valid file name; a name that is also another's folder is not.
+  auto two = [&](const std::string& a, const std::string& b) {
+    return R"({"type": "submit", "id": 1, "name": "", "priority": 0, "halt": {}, "seed": 0, "assets": [{"name": ")" + a +
+           R"(", "sha256": ")" + sha + R"(", "size": 1}, {"name": ")" + b + R"(", "sha256": ")" + sha + R"(", "size": 1}]})";
+  };
+  EXPECT_EQ(code_of(two("a/m.obj", "a")), DecodeError::invalid_value);
+  EXPECT_EQ(code_of(two("a", "a/b/m.obj")), DecodeError::invalid_value);
+  EXPECT_TRUE(decode_header(two(std::string(255, 'a'), "a-b/m.obj")).ok());
   EXPECT_EQ(code_of(R"({"type": "tile", "id": 1, "job": 1, "rect": [4, 0, 4, 8], "pass": 1, "spp": 1, "version": 1})"), DecodeError::invalid_value);
   EXPECT_EQ(code_of(R"({"type": "tile", "id": 1, "job": 1, "rect": [0, 0, 4], "pass": 1, "spp": 1, "version": 1})"), DecodeError::wrong_type);
   EXPECT_EQ(code_of(R"({"type": "done", "id": 1, "job": 1, "state": "running", "progress": {"pass": 1, "spp": 1, "elapsed_s": 1, "samples_per_s": 1}})"), DecodeError::invalid_value);
