@@ -28,15 +28,6 @@ namespace fs = std::filesystem;
 
 const char* kRefused = "is not a submitted asset or a regular file under an allowed root";
 
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const SceneError& e) {
-        return e.what();
-    }
-    return "(no error)";
-}
-
 int open_fds() {
     int n = 0;
     for (auto it = fs::directory_iterator("/proc/self/fd"); it != fs::directory_iterator(); ++it) ++n;
@@ -84,7 +75,7 @@ TEST(FileConfinement, ObjMtllibOutsideRefusesTheMesh) {
     Job j;
     for (const std::string& ref : std::vector<std::string>{"../../../../outside/evil.mtl", (j.outside / "evil.mtl").string(), "/proc/self/environ"}) {
         auto obj = j.put("m.obj", "mtllib " + ref + "\n" + kTriangle);
-        std::string e = error_of([&] { j.load(obj); });
+        std::string e = test::scene_error_of([&] { j.load(obj); });
         EXPECT_NE(e.find(kRefused), std::string::npos) << ref << ": " << e;
         EXPECT_EQ(e.find(j.dir.path.string()), std::string::npos) << e;
     }
@@ -98,7 +89,7 @@ TEST(FileConfinement, GltfBufferOutsideRefusesTheMesh) {
     j.put("tri.bin", triangle_buffer());
     EXPECT_EQ(j.load(j.put("ok.gltf", gltf_with_buffer("tri.bin"))).triangle_count(), 1u);
     for (const std::string& uri : std::vector<std::string>{"../../../../outside/tri.bin", (j.outside / "tri.bin").string()}) {
-        std::string e = error_of([&] { j.load(j.put("m.gltf", gltf_with_buffer(uri))); });
+        std::string e = test::scene_error_of([&] { j.load(j.put("m.gltf", gltf_with_buffer(uri))); });
         EXPECT_NE(e.find(kRefused), std::string::npos) << uri << ": " << e;
     }
 }
@@ -117,7 +108,7 @@ TEST(FileConfinement, FifoNamedByAMeshIsNeverOpened) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     for (const std::string& ref : {fifo.string(), std::string("pipe.mtl")}) {
         auto t0 = std::chrono::steady_clock::now();
-        std::string e = error_of([&] { j.load(j.put("m.obj", "mtllib " + ref + "\n" + kTriangle)); });
+        std::string e = test::scene_error_of([&] { j.load(j.put("m.obj", "mtllib " + ref + "\n" + kTriangle)); });
         EXPECT_NE(e.find(kRefused), std::string::npos) << e;
         EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(2));
     }
@@ -132,11 +123,11 @@ TEST(FileConfinement, RefusedMeshesLeakNoDescriptor) {
     j.put("short.bin", "0123");  // shorter than its byteLength: Assimp refuses it
     auto short_gltf = j.put("short.gltf", gltf_with_buffer("short.bin", 42));
     auto outside_obj = j.put("o.obj", "mtllib ../../../../outside/evil.mtl\n" + std::string(kTriangle));
-    (void)error_of([&] { j.load(short_gltf); });
+    (void)test::scene_error_of([&] { j.load(short_gltf); });
     const int before = open_fds();
     for (int i = 0; i < 200; ++i) {
-        EXPECT_NE(error_of([&] { j.load(short_gltf); }), "(no error)");
-        EXPECT_NE(error_of([&] { j.load(outside_obj); }), "(no error)");
+        EXPECT_NE(test::scene_error_of([&] { j.load(short_gltf); }), "(no SceneError)");
+        EXPECT_NE(test::scene_error_of([&] { j.load(outside_obj); }), "(no SceneError)");
     }
     EXPECT_EQ(open_fds(), before);
 }
@@ -171,11 +162,11 @@ TEST(FileConfinement, YamlScenesNameOnlyWhatTheGateAdmits) {
                                    std::string("/dev/zero"), std::string("/proc/self/environ"), std::string("missing.png")}) {
         std::string yaml = "omega: 1\nmaterials:\n  m: {type: diffuse, reflectance: {type: bitmap, file: '" + ref +
                            "'}}\nshapes:\n  - {type: rectangle, material: m}\n";
-        std::string e = error_of([&] { parse_scene_string(yaml, virt, j.gate); });
+        std::string e = test::scene_error_of([&] { parse_scene_string(yaml, virt, j.gate); });
         EXPECT_NE(e.find("scene.yaml:3: materials.m.reflectance.file: '" + ref + "' " + kRefused), std::string::npos)
             << e;
         yaml = "omega: 1\nmaterials:\n  m: {type: diffuse}\nshapes:\n  - {type: mesh, file: '" + ref + "', material: m}\n";
-        e = error_of([&] { parse_scene_string(yaml, virt, j.gate); });
+        e = test::scene_error_of([&] { parse_scene_string(yaml, virt, j.gate); });
         EXPECT_NE(e.find("scene.yaml:5: shapes[0].file: '" + ref + "' " + kRefused), std::string::npos) << e;
     }
 }
@@ -196,7 +187,7 @@ TEST(FileConfinement, MitsubaScenesNameOnlyWhatTheGateAdmits) {
           "name=\"filename\" value=\"" + ref + "t.png\"/></texture></bsdf></shape>",
           "<shape type=\"rectangle\"><bsdf type=\"roughconductor\"><texture type=\"bitmap\" "
           "name=\"specular_reflectance\"><string name=\"filename\" value=\"" + ref + "t.png\"/></texture></bsdf></shape>"}) {
-        std::string e = error_of([&] { import_mitsuba_string(xml(body), virt, opt); });
+        std::string e = test::scene_error_of([&] { import_mitsuba_string(xml(body), virt, opt); });
         EXPECT_NE(e.find(kRefused), std::string::npos) << body << "\n" << e;
         EXPECT_NE(e.find("'" + ref), std::string::npos) << e;  // named as written
         EXPECT_EQ(e.find(j.dir.path.string(), virt.size()), std::string::npos) << e;
