@@ -68,7 +68,7 @@ public:
     // where sample_position() put it; outside the crop throws std::out_of_range (as does
     // pixel()). The caller drops non-finite values (and counts them): one would poison the pixel.
     void add_sample(int x, int y, const Rgb& value);
-    // One batch mean (e.g. a pass of a splatting integrator) standing for `weight` samples.
+    // One batch mean (e.g. one sample index of a splatting integrator) standing for `weight` samples.
     // Variance then comes from the spread of batch means: valid where per-sample statistics
     // are not (light-tracing splats land in pixels without a per-pixel sample count).
     void add_weighted(int x, int y, const Vec3d& value, double weight);

@@ -22,7 +22,6 @@ using Clock = std::chrono::steady_clock;
 constexpr long long kDefaultSpp = 64;
 constexpr long long kMaxPassSpp = 256;
 constexpr double kPassSeconds = 1.0;
-constexpr long long kMinBatches = 16;
 constexpr long long kMinSppForErrorHalt = 16;  // variance estimates below this are too noisy to stop on
 
 PathTracerSettings tracer_settings(const IntegratorDesc& d) { return {d.max_depth, d.rr_depth, d.light_sampling}; }
@@ -48,11 +47,21 @@ RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
 
 void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0,
                                           long long s1) {
+    // Every sample index is one batch: sample i of every pixel's camera subpath plus the splats
+    // of every pixel's light subpath i. The batches are i.i.d. estimates of the image, so their
+    // spread is the variance, and they reach the film in index order whatever the passes were:
+    // a render resumed at any pass boundary, or cut into passes by time, adds exactly the same
+    // batches in the same order as one that ran in one go (bit-identical mean and variance).
+    for (long long i = s0; i < s1 && !aborted(); ++i) render_sample_index(arena, tiles, i);
+}
+
+void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long i) {
     const Rect crop = film_.crop();
     const Sensor& sensor = scene_.sensor();
     const uint64_t width = uint64_t(sensor.width);
     const double inv_light_paths_per_sample = 1.0 / double(std::max<long long>(1, crop.area()));
-    std::vector<Vec3d> sums(size_t(crop.area()), Vec3d(0.0));
+    std::vector<Vec3d>& sums = batch_sums_;
+    sums.assign(size_t(crop.area()), Vec3d(0.0));
     auto at = [&](int x, int y) -> Vec3d& { return sums[size_t(y - crop.y0) * size_t(crop.width()) + size_t(x - crop.x0)]; };
     const Filter& filter = film_.filter();
 
@@ -78,29 +87,27 @@ void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vec
                         for (int y = tile.y0; y < tile.y1; ++y)
                             for (int x = tile.x0; x < tile.x1; ++x) {
                                 uint64_t pixel = uint64_t(y) * width + uint64_t(x);
-                                for (long long i = s0; i < s1; ++i) {
-                                    Rng rng = Rng::for_sample(settings_.seed, pixel, uint64_t(i));
-                                    Vec2 u_film{rng.next_1d(), rng.next_1d()};
-                                    Vec2 u_lens{rng.next_1d(), rng.next_1d()};
-                                    Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
-                                    local.clear();
-                                    if (per) per->clear();
-                                    Rgb L = bdpt_->sample(ray, rng, st, scratch, local, per);
-                                    ++st.samples;
-                                    bool finite = is_finite(L);
-                                    for (const Splat& sp : local) finite = finite && is_finite(sp.value);
-                                    if (!finite) {
-                                        ++st.nonfinite;  // the whole sample is dropped, splats included
-                                        continue;
-                                    }
-                                    at(x, y) += Vec3d(L);
-                                    out.insert(out.end(), local.begin(), local.end());
-                                    if (per)
-                                        for (const auto& c : *per) {
-                                            if (c.splat) tile_strategy_splats[ti - w0].push_back(c);
-                                            else strategies_->add_camera(x, y, c);
-                                        }
+                                Rng rng = Rng::for_sample(settings_.seed, pixel, uint64_t(i));
+                                Vec2 u_film{rng.next_1d(), rng.next_1d()};
+                                Vec2 u_lens{rng.next_1d(), rng.next_1d()};
+                                Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
+                                local.clear();
+                                if (per) per->clear();
+                                Rgb L = bdpt_->sample(ray, rng, st, scratch, local, per);
+                                ++st.samples;
+                                bool finite = is_finite(L);
+                                for (const Splat& sp : local) finite = finite && is_finite(sp.value);
+                                if (!finite) {
+                                    ++st.nonfinite;  // the whole sample is dropped, splats included
+                                    continue;
                                 }
+                                at(x, y) += Vec3d(L);
+                                out.insert(out.end(), local.begin(), local.end());
+                                if (per)
+                                    for (const auto& c : *per) {
+                                        if (c.splat) tile_strategy_splats[ti - w0].push_back(c);
+                                        else strategies_->add_camera(x, y, c);
+                                    }
                             }
                     }
                 },
@@ -116,9 +123,8 @@ void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vec
                 });
     }
     if (aborted()) return;
-    const double n = double(s1 - s0);
     for (int y = crop.y0; y < crop.y1; ++y)
-        for (int x = crop.x0; x < crop.x1; ++x) film_.add_weighted(x, y, at(x, y) / n, n);
+        for (int x = crop.x0; x < crop.x1; ++x) film_.add_weighted(x, y, at(x, y), 1.0);
 }
 
 void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats) {
@@ -217,8 +223,6 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
         // pass boundaries never change the image, only how often it is reported.
         long long fit = (long long)(kPassSeconds * report.samples_per_s / double(std::max<long long>(1, pixels)));
         long long cap = std::min(kMaxPassSpp, pass_spp * 2);
-        // Splatting integrators estimate variance from batch means: keep at least ~16 batches.
-        if (bdpt_ && spp_limit > 0) cap = std::min(cap, std::max(1LL, spp_limit / kMinBatches));
         pass_spp = std::clamp(fit, 1LL, cap);
     }
     return report;

@@ -61,9 +61,11 @@ public:
     // Strategies of the light and bdpt integrators the scene cannot use; see pathspace/classify.h.
 private:
     void render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats);
-    // Light tracing and BDPT: camera sums and splats of one pass, folded into the film as one
-    // batch mean per pixel (splats have no per-pixel sample count, so variance comes from batches).
+    // Light tracing and BDPT: samples [s0, s1) of every pixel, one batch per sample index (splats
+    // have no per-pixel sample count, so variance comes from the spread of batches).
     void render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0, long long s1);
+    // One batch of a splatting integrator: sample index i of every pixel, into the film.
+    void render_sample_index(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long i);
 
     const Scene& scene_;
     RenderSettings settings_;
@@ -75,6 +77,7 @@ private:
     tbb::enumerable_thread_specific<TracerStats> stats_;  // cache-aligned per thread
     tbb::enumerable_thread_specific<BdptScratch> scratch_;
     tbb::enumerable_thread_specific<std::vector<Splat>> sample_splats_;
+    std::vector<Vec3d> batch_sums_;  // crop-sized, one batch's pixel sums (driver thread only)
     std::atomic<bool> aborted_{false};
 };
 

@@ -101,11 +101,12 @@ class Daemon:
             self.proc.wait(10)
 
 
-def local_render(scene_bytes, out, spp, seed=0, workdir=None):
+def local_render(scene_bytes, out, spp, seed=0, workdir=None, integrator=None):
     path = os.path.join(workdir, "local-scene.yaml")
     with open(path, "wb") as f:
         f.write(scene_bytes)
-    subprocess.run([OMEGA, "render", path, "--spp", str(spp), "--seed", str(seed), "-o", out, "--threads", "2", "-q"],
+    extra = ["--integrator", integrator] if integrator else []
+    subprocess.run([OMEGA, "render", path, "--spp", str(spp), "--seed", str(seed), "-o", out, "--threads", "2", "-q"] + extra,
                    check=True, timeout=120, stdout=subprocess.DEVNULL)
 
 
