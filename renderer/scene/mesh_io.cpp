@@ -95,8 +95,10 @@ struct Merger {
 // the importer is gone, none of the file's memory.
 class MemoryStream : public Assimp::IOStream {
   public:
-    explicit MemoryStream(const std::string* bytes) : bytes_(bytes) {}
+    MemoryStream(const std::string* bytes, const std::function<bool()>* cancelled) : bytes_(bytes), cancelled_(cancelled) {}
     size_t Read(void* buffer, size_t size, size_t count) override {
+        // Parsers read in chunks as they go (OBJ: 1 MiB at a time): a cancel lands between two.
+        if (*cancelled_ && (*cancelled_)()) throw BuildCancelled();
         if (size == 0) return 0;
         const size_t n = std::min(count, (bytes_->size() - pos_) / size);
         std::memcpy(buffer, bytes_->data() + pos_, n * size);
@@ -118,6 +120,7 @@ class MemoryStream : public Assimp::IOStream {
 
   private:
     const std::string* bytes_;
+    const std::function<bool()>* cancelled_;
     size_t pos_ = 0;
 };
 
@@ -150,7 +153,7 @@ class GateIOSystem : public Assimp::IOSystem {
             }
             if (opt_.on_read) opt_.on_read(path);
         }
-        return new MemoryStream(&it->second);
+        return new MemoryStream(&it->second, &opt_.cancelled);
     }
     void Close(Assimp::IOStream* stream) override { delete stream; }
 
@@ -173,11 +176,16 @@ class GateIOSystem : public Assimp::IOSystem {
     std::string refusal_;
 };
 
-// Assimp polls this while it parses; false aborts the import.
+// Assimp reports progress while it parses (OBJ: every 100 KiB) and between post-processing
+// steps, but most importers ignore Update's answer: a cancel throws instead, which unwinds the
+// importer like one of its own DeadlyImportErrors (ReadFile catches it, or it reaches our caller).
 class CancelPoll : public Assimp::ProgressHandler {
   public:
     explicit CancelPoll(std::function<bool()> cancelled) : cancelled_(std::move(cancelled)) {}
-    bool Update(float) override { return !(cancelled_ && cancelled_()); }
+    bool Update(float) override {
+        if (cancelled_ && cancelled_()) throw BuildCancelled();
+        return true;
+    }
 
   private:
     std::function<bool()> cancelled_;
