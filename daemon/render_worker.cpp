@@ -175,8 +175,15 @@ void RenderWorker::run() {
       const bool draining = stop_requested() == StopKind::drain;
       const double since = std::chrono::duration<double>(Clock::now() - last_ckpt).count();
       if (draining || since >= spec_.checkpoint_interval_s) {
-        write_checkpoint(spec_.paths.checkpoint(), *snap);
-        last_on_disk = true;
+        // A checkpoint that cannot be written (a full disk) costs only the protection it gives:
+        // the render goes on, the next one is tried at the next due boundary, and a crash
+        // meanwhile resumes from the previous one. The job is not failed for it.
+        try {
+          write_checkpoint(spec_.paths.checkpoint(), *snap);
+          last_on_disk = true;
+        } catch (const std::exception& e) {
+          log_.warn("job {}: checkpoint at {} spp not written ({}); rendering on", spec_.job, snap->spp, e.what());
+        }
         last_ckpt = Clock::now();
       }
       PassUpdate u;
