@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "film/film.h"
+#include "shared_data.h"
 #include "sampling/rng.h"
 
 namespace omega {
@@ -172,8 +173,8 @@ TEST(Exr, ErrorsNameThePath) {
 }
 
 TEST(Exr, ReadsTungstenReference) {
-    const std::string path = "/work/shared/scenes/cornell-box/TungstenRender.exr";
-    if (!fs::exists(path)) GTEST_SKIP() << path << " not present";
+    const std::string path = test::shared_path("scenes/cornell-box/TungstenRender.exr");
+    if (!test::shared_available(path)) GTEST_SKIP() << path << " not present";
     const ExrImage img = read_exr(path);
     EXPECT_EQ(img.width, 1024);
     EXPECT_EQ(img.height, 1024);

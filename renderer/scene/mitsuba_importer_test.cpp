@@ -1,4 +1,5 @@
 #include "scene/mitsuba_importer.h"
+#include "shared_data.h"
 
 #include <gtest/gtest.h>
 
@@ -15,13 +16,9 @@ using omega::test::TempDir;
 
 namespace {
 
-const std::string kShared = "/work/shared/scenes";
-
-std::string shared_scene(const std::string& name) {
-    // The shared scenes live beside the repository checkouts; skip where they are absent.
-    return kShared + "/" + name + "/scene.xml";
-}
-bool have_shared() { return std::ifstream(shared_scene("cornell-box")).good(); }
+std::string shared_scene(const std::string& name) { return test::shared_path("scenes/" + name + "/scene.xml"); }
+// The shared scenes lie beside the checkout (tests/support/shared_data.h); CI fails without them.
+bool have_shared() { return test::shared_available(shared_scene("cornell-box")); }
 
 SceneDesc import(const std::string& body, const MitsubaOptions& opt = {}) {
     return import_mitsuba_string("<scene version=\"3.0.0\">\n" + body + "\n</scene>\n", "scene.xml", opt);
@@ -161,7 +158,7 @@ const char* kLitBox = R"(<shape type="rectangle"><emitter type="area"><rgb name=
 // The two shared scenes
 
 TEST(MitsubaImporter, CornellBox) {
-    if (!have_shared()) GTEST_SKIP() << "no " << kShared;
+    if (!have_shared()) GTEST_SKIP() << "no " << shared_scene("cornell-box");
     SceneDesc d = import_mitsuba_file(shared_scene("cornell-box"));
     EXPECT_EQ(d.integrator.type, IntegratorType::Path);
     EXPECT_EQ(d.integrator.max_depth, 30);  // the file's <default>
@@ -201,7 +198,7 @@ TEST(MitsubaImporter, CornellBox) {
 }
 
 TEST(MitsubaImporter, CornellBoxDefinesOverride) {
-    if (!have_shared()) GTEST_SKIP() << "no " << kShared;
+    if (!have_shared()) GTEST_SKIP() << "no " << shared_scene("cornell-box");
     MitsubaOptions opt;
     opt.defines = {{"resx", "256"}, {"resy", "128"}, {"max_depth", "65"}, {"integrator", "path"}};
     SceneDesc d = import_mitsuba_file(shared_scene("cornell-box"), opt);
@@ -213,7 +210,7 @@ TEST(MitsubaImporter, CornellBoxDefinesOverride) {
 }
 
 TEST(MitsubaImporter, VeachMis) {
-    if (!have_shared()) GTEST_SKIP() << "no " << kShared;
+    if (!have_shared()) GTEST_SKIP() << "no " << shared_scene("cornell-box");
     SceneDesc d = import_mitsuba_file(shared_scene("veach-mis"));
     EXPECT_EQ(d.sensor.film.width, 1280);
     EXPECT_EQ(d.sensor.film.height, 720);
@@ -246,7 +243,7 @@ TEST(MitsubaImporter, VeachMis) {
 }
 
 TEST(MitsubaImporter, SharedScenesRoundTripThroughYaml) {
-    if (!have_shared()) GTEST_SKIP() << "no " << kShared;
+    if (!have_shared()) GTEST_SKIP() << "no " << shared_scene("cornell-box");
     for (const char* name : {"cornell-box", "veach-mis"}) {
         SCOPED_TRACE(name);
         expect_round_trip(import_mitsuba_file(shared_scene(name)));
