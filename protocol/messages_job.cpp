@@ -15,7 +15,8 @@ namespace {
 // Asset names become paths under the daemon's job directory, so refuse anything that could
 // leave it. The daemon still resolves them safely; this is the first line.
 bool is_safe_asset_name(std::string_view s) {
-  if (s.empty() || s.front() == '/' || s.back() == '/') return false;
+  // 1024 bytes in all keeps STATE/jobs/ID/files/NAME well inside PATH_MAX.
+  if (s.empty() || s.size() > 1024 || s.front() == '/' || s.back() == '/') return false;
   std::size_t start = 0;
   while (start <= s.size()) {
     std::size_t end = s.find('/', start);
@@ -69,7 +70,7 @@ Result<Submit, DecodeError> decode<Submit>(const DecodedFrame& f) {
     ref.name = a.str("name", kMaxNameBytes);
     if (a.ok() && !is_safe_asset_name(ref.name))
       a.fail(DecodeError::invalid_value, a.path_of("name"),
-             "must be a relative path without '.', '..' or empty components, each at most 255 bytes");
+             "must be a relative path of at most 1024 bytes without '.', '..' or empty components, each at most 255 bytes");
     if (a.ok() && !names.insert(ref.name).second)
       a.fail(DecodeError::invalid_value, a.path_of("name"), "'" + ref.name + "' is listed twice");
     ref.sha256 = detail::read_sha256(a, "sha256");

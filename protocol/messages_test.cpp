@@ -107,7 +107,8 @@ TEST(Messages, FieldValidation) {
   EXPECT_EQ(code_of(R"({"type": "submit", "id": 1, "name": "", "priority": 0, "halt": 5, "seed": 0, "assets": []})"), DecodeError::wrong_type);
   EXPECT_EQ(code_of(R"({"type": "submit", "id": 1, "name": "", "priority": 0, "halt": {}, "seed": 0, "integrator": "Path!", "assets": []})"), DecodeError::invalid_value);
   const std::string sha(64, 'a');
-  for (std::string bad : std::vector<std::string>{"/etc/passwd", "../x", "a/../b", "a//b", "a/", "./a", std::string(256, 'a') + "/m.obj"}) {
+  for (std::string bad : std::vector<std::string>{"/etc/passwd", "../x", "a/../b", "a//b", "a/", "./a", std::string(256, 'a') + "/m.obj",
+                                                    [] { std::string n; for (int i = 0; i < 5; ++i) n += std::string(250, 'a') + "/"; return n + "m.obj"; }()}) {
     std::string h = R"({"type": "submit", "id": 1, "name": "", "priority": 0, "halt": {}, "seed": 0, "assets": [{"name": ")" +
                     bad + R"(", "sha256": ")" + sha + R"(", "size": 1}]})";
     EXPECT_EQ(code_of(h), DecodeError::invalid_value) << bad;
