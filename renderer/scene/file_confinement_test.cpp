@@ -123,6 +123,11 @@ TEST(FileConfinement, RefusedMeshesLeakNoDescriptor) {
     j.put("short.bin", "0123");  // shorter than its byteLength: Assimp refuses it
     auto short_gltf = j.put("short.gltf", gltf_with_buffer("short.bin", 42));
     auto outside_obj = j.put("o.obj", "mtllib ../../../../outside/evil.mtl\n" + std::string(kTriangle));
+    // Assimp refuses a 3-byte .mtl ("File is too small") and forgets its stream (found by
+    // fuzz_scene_assets): under ASan, a leak here fails the run.
+    j.put("broken.mtl", "ne\n");
+    const auto broken = j.put("b.obj", "mtllib broken.mtl\n" + std::string(kTriangle));
+    EXPECT_NE(test::scene_error_of([&] { j.load(broken); }).find("cannot load mesh 'b.obj'"), std::string::npos);
     (void)test::scene_error_of([&] { j.load(short_gltf); });
     const int before = open_fds();
     for (int i = 0; i < 200; ++i) {

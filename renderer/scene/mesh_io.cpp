@@ -14,6 +14,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <unordered_set>
 
 #include "io/file_gate.h"
 #include "scene/scene_error.h"
@@ -90,12 +91,21 @@ struct Merger {
     }
 };
 
-// A file's bytes as Assimp reads them. The bytes belong to the GateIOSystem, so that a stream
-// Assimp forgets to close (its glTF importer does, on some errors) costs no descriptor and, once
-// the importer is gone, none of the file's memory.
+// A file's bytes as Assimp reads them. The bytes belong to the GateIOSystem, and so does every
+// stream: Assimp deletes most streams itself (often directly, not through Close), but on some
+// errors it forgets one (its OBJ importer with a broken .mtl, its glTF importer with a short
+// buffer). A stream unregisters itself when deleted; the IOSystem deletes those left over when
+// the importer goes, so a forgotten stream costs neither a descriptor nor memory.
+class MemoryStream;
+using StreamSet = std::unordered_set<MemoryStream*>;
+
 class MemoryStream : public Assimp::IOStream {
   public:
-    MemoryStream(const std::string* bytes, const std::function<bool()>* cancelled) : bytes_(bytes), cancelled_(cancelled) {}
+    MemoryStream(const std::string* bytes, const std::function<bool()>* cancelled, StreamSet* live)
+        : bytes_(bytes), cancelled_(cancelled), live_(live) {
+        live_->insert(this);
+    }
+    ~MemoryStream() override { live_->erase(this); }
     size_t Read(void* buffer, size_t size, size_t count) override {
         // Parsers read in chunks as they go (OBJ: 1 MiB at a time): a cancel lands between two.
         if (*cancelled_ && (*cancelled_)()) throw BuildCancelled();
@@ -121,6 +131,7 @@ class MemoryStream : public Assimp::IOStream {
   private:
     const std::string* bytes_;
     const std::function<bool()>* cancelled_;
+    StreamSet* live_;
     size_t pos_ = 0;
 };
 
@@ -153,9 +164,12 @@ class GateIOSystem : public Assimp::IOSystem {
             }
             if (opt_.on_read) opt_.on_read(path);
         }
-        return new MemoryStream(&it->second, &opt_.cancelled);
+        return new MemoryStream(&it->second, &opt_.cancelled, &live_);
     }
     void Close(Assimp::IOStream* stream) override { delete stream; }
+    ~GateIOSystem() override {
+        while (!live_.empty()) delete *live_.begin();  // streams Assimp forgot; each unregisters itself
+    }
 
     // The first refusal, if any: a confined gate's refusal of any file refuses the mesh.
     const std::string& refusal() const { return refusal_; }
@@ -173,6 +187,7 @@ class GateIOSystem : public Assimp::IOSystem {
     std::string dir_;
     const MeshFileOptions& opt_;
     std::map<std::string, std::string> files_;  // every file read, by absolute path
+    StreamSet live_;                             // every stream not yet deleted
     std::string refusal_;
 };
 
