@@ -279,7 +279,10 @@ def test_slow_builds_stop_on_cancel_and_sigterm(tmp, daemons):
     print(f"scene build {build:.2f} s; a cancel during the render's build freed the job in {freed:.2f} s")
     assert "rendering from" not in "\n".join(l for l in d.log().splitlines() if f"job {job}:" in l), \
         "the cancelled build ran to the end"
-    assert freed < 2.0, f"cancel took {freed:.2f} s (the build takes {build:.2f} s)"
+    # Under a sanitizer the build is small and everything 5-15x slower: the bounds only catch a
+    # build that runs to its end; the Release run is the one that measures.
+    assert SANITIZED or build > 1.0, f"the build took only {build:.2f} s: make the mesh larger"
+    assert freed < (5.0 if SANITIZED else 2.0), f"cancel took {freed:.2f} s (the build takes {build:.2f} s)"
     # SIGTERM while a build runs: omegad drains at once and exits.
     h = c.submit(scene, name="slow2", assets=[("big.obj", big)], halt_=op.halt(spp=100000))
     assert h["type"] == "accepted", h
@@ -289,7 +292,7 @@ def test_slow_builds_stop_on_cancel_and_sigterm(tmp, daemons):
     assert d.terminate(timeout=max(10, 3 * build)) == 0
     took = time.monotonic() - t0
     print(f"SIGTERM during a build: exited in {took:.2f} s")
-    assert took < 3.0, took
+    assert took < (10.0 if SANITIZED else 3.0), took  # LeakSanitizer's exit scan takes its time
 
 
 if __name__ == "__main__":
