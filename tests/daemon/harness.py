@@ -68,6 +68,7 @@ class Daemon:
             return "\n".join(self.lines)
 
     def wait_log(self, pattern, timeout=30, start=0):
+        timeout *= SLOWDOWN
         deadline = time.monotonic() + timeout
         rx = re.compile(pattern)
         while time.monotonic() < deadline:
@@ -117,7 +118,24 @@ def exr_equal(full, part):
     return r.returncode == 0
 
 
+# Sanitizer builds run 5-15x slower, and CI runs two daemon tests at once: waits for progress
+# scale by this factor so that a slow machine fails only a real stall.
+SLOWDOWN = 4 if os.environ.get("OMEGA_SANITIZER") else 1
+
+
+def wait_spp(c, job, at_least, timeout=60):
+    deadline = time.monotonic() + timeout * SLOWDOWN
+    h = None
+    while time.monotonic() < deadline:
+        h = c.job("status", job)
+        if h["progress"]["spp"] >= at_least:
+            return h
+        time.sleep(0.05)
+    raise AssertionError(f"job {job} stuck below {at_least} spp after {timeout * SLOWDOWN} s (last: {h})")
+
+
 def wait_state(c, job, states, timeout=60):
+    timeout *= SLOWDOWN
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         h = c.job("status", job)

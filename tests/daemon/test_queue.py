@@ -5,7 +5,7 @@ import os
 import re
 import time
 
-from harness import Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state, watch
+from harness import Daemon, Test, exr_equal, local_render, op, small_cornell, wait_spp, wait_state, watch
 
 
 def log_index(d, pattern):
@@ -14,15 +14,6 @@ def log_index(d, pattern):
             return i
     raise AssertionError(f"no /{pattern}/ in the log")
 
-
-def wait_spp(c, job, at_least, timeout=60):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        h = c.job("status", job)
-        if h["progress"]["spp"] >= at_least:
-            return h
-        time.sleep(0.05)
-    raise AssertionError(f"job {job} stuck below {at_least} spp")
 
 
 def test_priorities_preemption_fifo(tmp, daemons):
