@@ -7,6 +7,7 @@
 
 #include "batch_command.h"
 #include "job_commands.h"
+#include "merge_command.h"
 #include "converge_command.h"
 #include "import_command.h"
 #include "render_command.h"
@@ -29,6 +30,8 @@ int main(int argc, char** argv) {
     omega::add_converge_command(app, converge);
     omega::CompareArgs compare;
     omega::add_compare_command(app, compare);
+    omega::MergeArgs merge;
+    omega::add_merge_command(app, merge);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -43,6 +46,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("import")) return omega::run_import(import_args);
         if (app.got_subcommand("converge")) return omega::run_converge(converge);
         if (app.got_subcommand("compare")) return omega::run_compare(compare);
+        if (app.got_subcommand("merge")) return omega::run_merge(merge);
     } catch (const std::exception& e) {
         fmt::print(stderr, "omega: internal error: {}\n", e.what());
         return 1;

@@ -7,7 +7,9 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "client_error.h"
 #include "film/film.h"
+#include "film/partial_exr.h"
 #include "import_command.h"
 #include "integrator/render_session.h"
 #include "progress_bar.h"
@@ -16,6 +18,7 @@
 #include "scene/scene_error.h"
 #include "scene/mitsuba_importer.h"
 #include "scene/scene_parser.h"
+#include "scene_hash.h"
 
 namespace omega {
 
@@ -43,8 +46,12 @@ void add_render_command(CLI::App& app, RenderArgs& a) {
     auto* time = cmd->add_option("--time", a.time_s, "Render for this many seconds")->check(CLI::PositiveNumber);
     auto* err = cmd->add_option("--target-error", a.target_error, "Stop at this estimated relative error")
                     ->check(CLI::PositiveNumber);
-    spp->excludes(time)->excludes(err);
-    time->excludes(err);
+    auto* samples = cmd->add_option("--samples", a.samples,
+                                    "A:B: render only sample indices [A, B) of every pixel, into a partial EXR that "
+                                    "`omega merge` combines exactly with the other ranges");
+    spp->excludes(time)->excludes(err)->excludes(samples);
+    time->excludes(err)->excludes(samples);
+    err->excludes(samples);
     cmd->add_option("--integrator", a.integrator, "path | light | bdpt (overrides the scene)")
         ->check(CLI::IsMember({"path", "light", "bdpt"}));
     cmd->add_option("--threads", a.threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
@@ -54,7 +61,8 @@ void add_render_command(CLI::App& app, RenderArgs& a) {
     cmd->add_option("--strategies", a.strategies,
                     "light/bdpt: also write each (s,t) strategy's weighted and unweighted image as EXR layers "
                     "sSTt.weighted/.unweighted, for path lengths up to this")
-        ->check(CLI::Range(1, 12));
+        ->check(CLI::Range(1, 12))
+        ->excludes(samples);
     cmd->add_option("-D,--define", a.defines, "Mitsuba XML scenes: set a <default> variable, name=value (repeatable)");
 }
 
@@ -63,6 +71,15 @@ int run_render(const RenderArgs& a) {
     std::unique_ptr<Scene> scene;
     MitsubaOptions xml;
     if (!parse_defines(a.defines, xml.defines)) return 2;
+    std::optional<SampleRange> range;
+    if (!a.samples.empty()) {
+        try {
+            range = parse_sample_range(a.samples);
+        } catch (const std::invalid_argument& e) {
+            fmt::print(stderr, "omega: --samples: {}\n", e.what());
+            return 2;
+        }
+    }
     try {
         desc = load_scene_file(a.scene, xml);
         if (a.integrator == "path") desc.integrator.type = IntegratorType::Path;
@@ -77,9 +94,25 @@ int run_render(const RenderArgs& a) {
     for (auto& w : path_space_warnings(*scene, desc.integrator.type)) desc.warnings.push_back(std::move(w));
     for (const auto& w : desc.warnings) fmt::print(stderr, "omega: warning: {}\n", w);
 
+    // Hashed before rendering, so an unreadable file fails now rather than after the render.
+    std::string scene_hash;
+    if (range) {
+        try {
+            scene_hash = client::scene_content_hash(a.scene, desc, a.defines);
+        } catch (const client::ClientError& e) {
+            fmt::print(stderr, "omega: {}\n", e.what());
+            return e.exit_code();
+        }
+    }
+
     RenderSettings rs;
     rs.halt = desc.sensor.halt;
     if (a.spp || a.time_s || a.target_error) rs.halt = HaltDesc{a.spp, a.time_s, a.target_error};
+    // A part starts on an empty film at sample A, exactly as a resumed render continues at it.
+    if (range) {
+        rs.halt = HaltDesc{range->end, std::nullopt, std::nullopt};
+        rs.first_sample = range->begin;
+    }
     rs.threads = a.threads;
     rs.seed = a.seed;
     rs.integrator = desc.integrator;
@@ -115,7 +148,7 @@ int run_render(const RenderArgs& a) {
                 << std::flush;
         if (a.quiet) return;
         double frac = -1;
-        if (h.spp) frac = double(r.spp) / double(*h.spp);
+        if (h.spp) frac = double(r.spp - rs.first_sample) / double(*h.spp - rs.first_sample);
         else if (h.time_s) frac = r.elapsed_s / *h.time_s;
         else if (!h.target_error) frac = double(r.spp) / 64.0;
         bar.update(frac, fmt::format("{} spp  {:.1f}s  err {:.4f}  {} samples/s{}", r.spp, r.elapsed_s,
@@ -126,7 +159,7 @@ int run_render(const RenderArgs& a) {
 
     std::string out = a.output.empty() ? default_output(a.scene) : a.output;
     ExrMeta meta;
-    meta.spp = last.spp;
+    meta.spp = last.spp - rs.first_sample;
     meta.time_s = last.elapsed_s;
     meta.integrator = integrator_name(desc.integrator.type);
     meta.seed = a.seed;
@@ -135,12 +168,19 @@ int run_render(const RenderArgs& a) {
     meta.rel_error = last.error.mean_rel_error;
     if (const StrategyImages* si = session->strategy_images()) meta.layers = si->layers(last.spp);
     try {
-        write_exr(out, session->film(), meta);
+        if (range) {
+            PartInfo part{{{range->begin, last.spp}}, scene_hash, a.seed, meta.integrator};
+            write_partial_exr(out, session->film(), meta, part);
+        } else {
+            write_exr(out, session->film(), meta);
+        }
     } catch (const std::exception& e) {
         fmt::print(stderr, "omega: {}\n", e.what());
         return 1;
     }
-    fmt::print("{}: {} spp in {:.2f} s, {} samples/s, {} rays/s, rel. error {:.4f}, {} non-finite\n", out, last.spp,
+    const std::string what = range ? fmt::format("samples {}:{} ({} spp)", range->begin, last.spp, meta.spp)
+                                   : fmt::format("{} spp", last.spp);
+    fmt::print("{}: {} in {:.2f} s, {} samples/s, {} rays/s, rel. error {:.4f}, {} non-finite\n", out, what,
                last.elapsed_s, human_rate(last.samples_per_s), human_rate(last.rays_per_s), last.error.mean_rel_error,
                last.nonfinite);
     return 0;

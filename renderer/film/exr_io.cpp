@@ -94,6 +94,7 @@ std::vector<uint8_t> encode_planes(int width, int height, const Rect& rect, cons
     for (size_t i = 0; i < meta.warnings.size(); ++i) warnings += (i ? "\n" : "") + meta.warnings[i];
     header.insert("omega.warnings", Imf::StringAttribute(warnings));
     header.insert("omega.rel_error", Imf::DoubleAttribute(meta.rel_error));
+    for (const auto& [name, value] : meta.attributes) header.insert(name, Imf::StringAttribute(value));
 
     const size_t w = size_t(rect.width()), h = size_t(rect.height()), area = w * h;
     Imf::FrameBuffer fb;
@@ -115,6 +116,12 @@ std::vector<uint8_t> encode_planes(int width, int height, const Rect& rect, cons
             fb.insert(names.back(), Imf::Slice::Make(Imf::FLOAT, const_cast<float*>(layer.rgb.data()) + k, data,
                                                      3 * sizeof(float), 3 * sizeof(float) * w));
         }
+    }
+    for (const auto& u : meta.uint_channels) {
+        if (u.data.size() != area) throw std::invalid_argument("EXR channel '" + u.name + "' has the wrong size");
+        header.channels().insert(u.name, Imf::Channel(Imf::UINT));
+        fb.insert(u.name, Imf::Slice::Make(Imf::UINT, const_cast<uint32_t*>(u.data.data()), data, sizeof(uint32_t),
+                                           sizeof(uint32_t) * w));
     }
     MemOStream os;
     {
@@ -157,7 +164,11 @@ std::string number_text(float v) {
     return std::string(buf, r.ptr);
 }
 
-ExrImage read_image(Imf::InputFile& file, long long max_pixels) {
+// UINT channels are read only from files (partial renders); network bytes never need them, and
+// a hostile tile could declare thousands.
+constexpr int kMaxUintChannels = 32;
+
+ExrImage read_image(Imf::InputFile& file, long long max_pixels, bool with_uint) {
     const Imf::Header& header = file.header();
     // A truncated file would otherwise read as zeros (or throw mid-way for some compressions).
     if (!file.isComplete()) throw std::runtime_error("file is incomplete");
@@ -194,6 +205,14 @@ ExrImage read_image(Imf::InputFile& file, long long max_pixels) {
     for (int k = 0; k < 3; ++k) {
         fb.insert(kRgb[k], Imf::Slice::Make(Imf::FLOAT, &img.rgb[size_t(k)], dw, xs, ys));
         if (has_var) fb.insert(kVar[k], Imf::Slice::Make(Imf::FLOAT, &img.var[size_t(k)], dw, xs, ys));
+    }
+    for (auto it = ch.begin(); with_uint && it != ch.end(); ++it) {
+        if (it.channel().type != Imf::UINT || it.channel().xSampling != 1 || it.channel().ySampling != 1) continue;
+        if (img.uint_channels.size() >= size_t(kMaxUintChannels))
+            throw std::runtime_error("more than " + std::to_string(kMaxUintChannels) + " UINT channels");
+        auto& plane = img.uint_channels[it.name()];
+        plane.resize(area);
+        fb.insert(it.name(), Imf::Slice::Make(Imf::UINT, plane.data(), dw, sizeof(uint32_t), sizeof(uint32_t) * size_t(w)));
     }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
@@ -281,7 +300,7 @@ std::vector<uint8_t> encode_exr_image(const ExrImage& img, const ExrMeta& meta) 
 ExrImage read_exr(const std::string& path, long long max_pixels) {
     try {
         Imf::InputFile file(path.c_str());
-        return read_image(file, max_pixels);
+        return read_image(file, max_pixels, true);
     } catch (const std::exception& e) {
         throw std::runtime_error("read_exr: " + path + ": " + e.what());
     }
@@ -337,7 +356,7 @@ ExrImage decode_exr_memory(std::span<const uint8_t> bytes, long long max_pixels)
             throw std::runtime_error("invalid EXR data");
         MemIStream is(bytes);
         Imf::InputFile file(is);
-        return read_image(file, max_pixels);
+        return read_image(file, max_pixels, false);
     } catch (const std::exception& e) {
         throw std::runtime_error(std::string("decode_exr_memory: ") + e.what());
     }

@@ -116,6 +116,46 @@ ErrorEstimate Film::estimate_error(double eps) const {
 
 void Film::clear() { std::fill(px_.begin(), px_.end(), Accum{}); }
 
+PixelState Film::state(int x, int y) const {
+    const Accum& a = px_[index(x, y)];
+    PixelState s;
+    s.n = a.n;
+    s.w = a.w;
+    for (int c = 0; c < 3; ++c) {
+        s.mean[c] = a.mean[c];
+        s.m2[c] = a.m2[c];
+    }
+    return s;
+}
+
+namespace {
+
+// Empty string: a state some film could hold; otherwise why not.
+const char* invalid_state(const PixelState& s) {
+    if (!std::isfinite(s.w) || s.w < 0 || (s.n == 0) != (s.w == 0)) return "bad sample weight";
+    for (int k = 0; k < 3; ++k)
+        if (!std::isfinite(s.mean[k]) || !std::isfinite(s.m2[k]) || s.m2[k] < 0)
+            return "non-finite or negative statistics";
+    if (s.n == 0)
+        for (int k = 0; k < 3; ++k)
+            if (s.mean[k] != 0 || s.m2[k] != 0) return "statistics for an empty pixel";
+    return "";
+}
+
+}  // namespace
+
+void Film::set_state(int x, int y, const PixelState& s) {
+    Accum& a = px_[index(x, y)];
+    if (const char* why = invalid_state(s); *why)
+        throw std::runtime_error("pixel (" + std::to_string(x) + ", " + std::to_string(y) + "): " + why);
+    a.n = s.n;
+    a.w = s.w;
+    for (int c = 0; c < 3; ++c) {
+        a.mean[c] = s.mean[c];
+        a.m2[c] = s.m2[c];
+    }
+}
+
 void Film::merge(const Film& other) {
     if (other.desc_.width != desc_.width || other.desc_.height != desc_.height || other.crop_.x0 != crop_.x0 ||
         other.crop_.y0 != crop_.y0 || other.crop_.x1 != crop_.x1 || other.crop_.y1 != crop_.y1)
@@ -246,19 +286,19 @@ Film Film::deserialize(const FilmDesc& desc, std::span<const uint8_t> bytes) {
     if (w != desc.width || h != desc.height || x0 != c.x0 || y0 != c.y0 || x1 != c.x1 || y1 != c.y1 ||
         count != film.px_.size())
         corrupt("written for a film of another size or crop");
-    for (Accum& a : film.px_) {
-        a.n = r.u64();
-        a.w = r.f64();
-        if (!std::isfinite(a.w) || a.w < 0 || (a.n == 0) != (a.w == 0)) corrupt("bad sample weight");
-        for (double& v : a.mean) v = r.f64();
-        for (double& v : a.m2) v = r.f64();
-        for (int k = 0; k < 3; ++k)
-            if (!std::isfinite(a.mean[k]) || !std::isfinite(a.m2[k]) || a.m2[k] < 0)
-                corrupt("non-finite or negative statistics");
-        if (a.n == 0 && (a.mean[0] != 0 || a.mean[1] != 0 || a.mean[2] != 0 || a.m2[0] != 0 || a.m2[1] != 0 ||
-                         a.m2[2] != 0))
-            corrupt("statistics for an empty pixel");
-    }
+    for (int y = c.y0; y < c.y1; ++y)
+        for (int x = c.x0; x < c.x1; ++x) {
+            PixelState st;
+            st.n = r.u64();
+            st.w = r.f64();
+            for (double& v : st.mean) v = r.f64();
+            for (double& v : st.m2) v = r.f64();
+            try {
+                film.set_state(x, y, st);
+            } catch (const std::runtime_error& e) {
+                corrupt(e.what());
+            }
+        }
     return film;
 }
 

@@ -38,6 +38,15 @@ struct PixelStats {
     uint64_t n = 0;
 };
 
+// A pixel's exact accumulator state: what a partial render carries so that parts merge as
+// Film::merge would (film/partial_exr.h).
+struct PixelState {
+    uint64_t n = 0;  // samples (or batches) added
+    double w = 0;    // sum of their weights
+    double mean[3] = {0, 0, 0};
+    double m2[3] = {0, 0, 0};
+};
+
 struct ErrorEstimate {
     double mean_rel_error = 0;     // mean over pixels of sqrt(var)/max(mean, eps), luminance-free (channel average)
     double image_mean = 0;         // mean of all pixel means (channel average)
@@ -77,6 +86,11 @@ public:
     // mean_rel_error and image_mean_stderr are +inf so that a target-error halt cannot fire.
     ErrorEstimate estimate_error(double eps = 1e-2) const;
     void clear();
+
+    PixelState state(int x, int y) const;
+    // Throws std::runtime_error for a state no film could hold (non-finite or negative
+    // statistics, a weight without samples); std::out_of_range outside the crop.
+    void set_state(int x, int y, const PixelState& s);
 
     // Adds other's samples to this film, as if they had been added here (Chan et al.'s pairwise
     // update of mean and M2). Throws std::invalid_argument unless size and crop are equal.
@@ -121,6 +135,15 @@ struct ExrMeta {
         std::vector<float> rgb;
     };
     std::vector<Layer> layers;
+    // Extra string attributes (e.g. a partial render's omega.samples).
+    std::map<std::string, std::string> attributes;
+    // Extra UINT channels, one uint32 per pixel each, crop-sized and row-major: exact data that
+    // floats cannot carry (a partial render's accumulator state).
+    struct UintChannel {
+        std::string name;
+        std::vector<uint32_t> data;
+    };
+    std::vector<UintChannel> uint_channels;
 };
 
 // Writes R,G,B and var.R,var.G,var.B (float32). The data window is the crop, the display window
@@ -139,6 +162,8 @@ struct ExrImage {
     // Every string, int, float and double attribute (omega.* and standard ones) as text;
     // floating-point values in shortest round-trip form.
     std::map<std::string, std::string> attributes;
+    // Every UINT channel by name (the image's size, row-major); empty for most files.
+    std::map<std::string, std::vector<uint32_t>> uint_channels;
 };
 // Throws std::runtime_error naming the path on failure, a missing R/G/B channel, or a data
 // window larger than max_pixels.

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <thread>
@@ -265,6 +266,43 @@ TEST(Film, ConcurrentWritersOnSeparateTiles) {
     for (auto& t : workers) t.join();
     for (const Rect& t : tiles) render(ser, t);
     EXPECT_EQ(par.serialize(), ser.serialize());
+}
+
+}  // namespace
+}  // namespace omega
+
+namespace omega {
+namespace {
+
+// A part's state channels come from a file: set_state takes back exactly what state() gave, and
+// refuses what no film could hold (a hostile or corrupt part must not poison a merge).
+TEST(Film, StateRoundTripsAndRefusesImpossibleStates) {
+    FilmDesc d;
+    d.width = 3;
+    d.height = 2;
+    Film a(d), b(d);
+    a.add_sample(1, 1, Rgb(0.25f, 2.f, 7.f));
+    a.add_sample(1, 1, Rgb(0.5f, 1.f, 3.f));
+    b.set_state(1, 1, a.state(1, 1));
+    const PixelState sa = a.state(1, 1), sb = b.state(1, 1);
+    EXPECT_EQ(std::memcmp(&sa, &sb, sizeof(PixelState)), 0);
+    EXPECT_EQ(b.pixel(1, 1).var_of_mean.x, a.pixel(1, 1).var_of_mean.x);
+    PixelState s = a.state(1, 1);
+    auto refuses = [&](PixelState bad) { EXPECT_THROW(b.set_state(0, 0, bad), std::runtime_error); };
+    PixelState nan_mean = s;
+    nan_mean.mean[1] = std::nan("");
+    refuses(nan_mean);
+    PixelState negative_m2 = s;
+    negative_m2.m2[2] = -1;
+    refuses(negative_m2);
+    PixelState weight_without_samples = s;
+    weight_without_samples.n = 0;
+    refuses(weight_without_samples);
+    PixelState empty_with_mean{};
+    empty_with_mean.mean[0] = 1;
+    refuses(empty_with_mean);
+    EXPECT_THROW(b.set_state(3, 0, s), std::out_of_range);
+    EXPECT_EQ(b.pixel(0, 0).n, 0u);  // nothing refused was written
 }
 
 }  // namespace

@@ -2,7 +2,9 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -128,6 +130,56 @@ TEST_F(CliTest, BadScenesExitWithCodeTwoAndNameTheProblem) {
         EXPECT_NE(r.output.find("bad.yaml:"), std::string::npos) << c.name << ": " << r.output;
         EXPECT_EQ(r.output.find("internal error"), std::string::npos) << c.name << ": " << r.output;
     }
+}
+
+// `omega render --samples` on "different machines" and `omega merge`: the merged file equals the
+// single render within the documented 1e-6 relative; parts of a changed scene are refused.
+TEST_F(CliTest, PartsRenderedApartMergeToTheSingleRender) {
+    std::string scene = write("parts.yaml", kGood);
+    auto path = [&](const char* name) { return (dir_ / name).string(); };
+    for (const char* integrator : {"path", "bdpt"}) {
+        const std::string common = " --seed 3 --threads 2 -q --integrator " + std::string(integrator);
+        ASSERT_EQ(run("render " + scene + " --spp 9 -o " + path("whole.exr") + common).code, 0);
+        ASSERT_EQ(run("render " + scene + " --samples 0:2 -o " + path("p0.exr") + common).code, 0);
+        ASSERT_EQ(run("render " + scene + " --samples 2:7 -o " + path("p1.exr") + common).code, 0);
+        CmdResult last = run("render " + scene + " --samples 7:9 -o " + path("p2.exr") + common);
+        ASSERT_EQ(last.code, 0) << last.output;
+        CmdResult m = run("merge " + path("p2.exr") + " " + path("p0.exr") + " " + path("p1.exr") + " -o " +
+                          path("merged.exr"));
+        ASSERT_EQ(m.code, 0) << m.output;
+        EXPECT_NE(m.output.find("3 part(s), samples 0:9 (9 spp)"), std::string::npos) << m.output;
+        omega::ExrImage whole = omega::read_exr(path("whole.exr")), merged = omega::read_exr(path("merged.exr"));
+        EXPECT_EQ(merged.attributes["omega.spp"], "9");
+        EXPECT_EQ(merged.attributes["omega.samples"], "0:9");
+        EXPECT_EQ(merged.attributes["omega.integrator"], integrator);
+        ASSERT_EQ(whole.rgb.size(), merged.rgb.size());
+        ASSERT_EQ(whole.var.size(), merged.var.size());
+        for (auto [a, b] : {std::pair{&whole.rgb, &merged.rgb}, std::pair{&whole.var, &merged.var}})
+            for (size_t i = 0; i < a->size(); ++i)
+                EXPECT_LE(std::abs((*a)[i] - (*b)[i]), 1e-6f * std::max(std::abs((*a)[i]), std::abs((*b)[i])))
+                    << integrator << " value " << i;
+        EXPECT_GT(whole.rgb[3 * (6 * 16 + 8)], 0.f);
+    }
+    // A part of another scene (one reflectance changed) is refused, naming the file.
+    std::string changed = kGood;
+    changed.replace(changed.find("0.5, 0.5, 0.5"), 13, "0.6, 0.5, 0.5");
+    ASSERT_EQ(run("render " + write("changed.yaml", changed) + " --samples 2:7 --seed 3 -q -o " + path("c1.exr")).code, 0);
+    CmdResult bad = run("merge " + path("p0.exr") + " " + path("c1.exr") + " -o " + path("bad.exr"));
+    EXPECT_EQ(bad.code, 2) << bad.output;
+    EXPECT_NE(bad.output.find("c1.exr: scene hash"), std::string::npos) << bad.output;
+    // Overlaps and gaps are refused; a plain render is not a part; a bad range is a usage error.
+    EXPECT_EQ(run("merge " + path("p0.exr") + " " + path("p0.exr") + " -o " + path("bad.exr")).code, 2);
+    CmdResult gap = run("merge " + path("p0.exr") + " " + path("p2.exr") + " -o " + path("gap.exr"));
+    EXPECT_EQ(gap.code, 2);
+    EXPECT_NE(gap.output.find("2:7 are in no part"), std::string::npos) << gap.output;
+    EXPECT_EQ(run("merge " + path("p0.exr") + " " + path("p2.exr") + " --allow-gaps -q -o " + path("gap.exr")).code, 0);
+    EXPECT_EQ(omega::read_exr(path("gap.exr")).attributes["omega.gaps"], "2:7");
+    CmdResult plain = run("merge " + path("whole.exr") + " " + path("p0.exr") + " -o " + path("bad.exr"));
+    EXPECT_EQ(plain.code, 2);
+    EXPECT_NE(plain.output.find("not a partial render"), std::string::npos) << plain.output;
+    EXPECT_FALSE(fs::exists(path("bad.exr")));
+    EXPECT_EQ(run("render " + scene + " --samples 5:5 -o " + path("x.exr")).code, 2);
+    EXPECT_EQ(run("render " + scene + " --samples 0:4 --spp 4 -o " + path("x.exr")).code, 2);
 }
 
 TEST_F(CliTest, UsageErrorsExitWithCodeTwo) {

@@ -8,32 +8,7 @@
 namespace omega {
 namespace {
 
-SceneDesc small_scene() {
-    SceneDesc d = test::empty_scene(40, 30);
-    d.sensor.to_world = Mat4::look_at({0, 1, -4}, {0, 0.5, 0}, {0, 1, 0});
-    d.materials["white"] = test::diffuse("white", Rgb(0.7f));
-    ConductorBsdf rough;
-    rough.alpha_u = rough.alpha_v = 0.2f;
-    d.materials["metal"] = MaterialDesc{"metal", rough, {}};
-    ShapeDesc floor;
-    floor.type = ShapeType::Rectangle;
-    floor.to_world = Mat4::rotate({1, 0, 0}, -90) * Mat4::scale({3, 3, 1});
-    floor.material = "white";
-    d.shapes.push_back(floor);
-    ShapeDesc cube;
-    cube.type = ShapeType::Cube;
-    cube.to_world = Mat4::translate({0, 0.5, 0}) * Mat4::rotate({0, 1, 0}, 30) * Mat4::scale({0.5, 0.5, 0.5});
-    cube.material = "metal";
-    d.shapes.push_back(cube);
-    ShapeDesc light;
-    light.type = ShapeType::Sphere;
-    light.center = {1, 2, -1};
-    light.radius = 0.3;
-    light.material = "white";
-    light.emitter = EmitterDesc{Rgb(10.f), false};
-    d.shapes.push_back(light);
-    return d;
-}
+SceneDesc small_scene() { return test::metal_cube_scene(40, 30); }
 
 bool bit_identical(const Film& a, const Film& b) {
     Rect c = a.crop();

@@ -19,6 +19,33 @@ RenderResult render(const SceneDesc& desc, long long spp, uint64_t seed, int thr
     return r;
 }
 
+SceneDesc metal_cube_scene(int w, int h) {
+    SceneDesc d = empty_scene(w, h);
+    d.sensor.to_world = Mat4::look_at({0, 1, -4}, {0, 0.5, 0}, {0, 1, 0});
+    d.materials["white"] = diffuse("white", Rgb(0.7f));
+    ConductorBsdf rough;
+    rough.alpha_u = rough.alpha_v = 0.2f;
+    d.materials["metal"] = MaterialDesc{"metal", rough, {}};
+    ShapeDesc floor;
+    floor.type = ShapeType::Rectangle;
+    floor.to_world = Mat4::rotate({1, 0, 0}, -90) * Mat4::scale({3, 3, 1});
+    floor.material = "white";
+    d.shapes.push_back(floor);
+    ShapeDesc cube;
+    cube.type = ShapeType::Cube;
+    cube.to_world = Mat4::translate({0, 0.5, 0}) * Mat4::rotate({0, 1, 0}, 30) * Mat4::scale({0.5, 0.5, 0.5});
+    cube.material = "metal";
+    d.shapes.push_back(cube);
+    ShapeDesc light;
+    light.type = ShapeType::Sphere;
+    light.center = {1, 2, -1};
+    light.radius = 0.3;
+    light.material = "white";
+    light.emitter = EmitterDesc{Rgb(10.f), false};
+    d.shapes.push_back(light);
+    return d;
+}
+
 SceneDesc empty_scene(int w, int h) {
     SceneDesc d;
     d.path = "<test>";

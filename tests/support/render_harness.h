@@ -24,6 +24,9 @@ RenderResult render(const SceneDesc& desc, long long spp, uint64_t seed = 0, int
 // A minimal valid scene: a perspective camera at the origin looking along +z, film w x h, box filter.
 SceneDesc empty_scene(int w, int h);
 MaterialDesc diffuse(const std::string& name, Rgb reflectance);
+// A rough metal cube on a diffuse floor lit by a small spherical emitter, seen from above: every
+// integrator reaches it, with glossy and diffuse paths (determinism and merge tests).
+SceneDesc metal_cube_scene(int w, int h);
 
 struct ZStats {
     double z = 0;        // aggregate z of the mean difference
