@@ -271,6 +271,7 @@ int run_converge(const ConvergeArgs& a) {
         fmt::print(stderr, "omega: {}\n", e.what());
         return 2;
     }
+    for (const auto& w : scene->warnings()) desc.warnings.push_back(w);
     for (const auto& w : desc.warnings) fmt::print(stderr, "omega: warning: {}\n", w);
 
     fs::path out_dir = a.out_dir.empty() ? fs::path("converge-" + fs::path(a.scene).stem().string()) : fs::path(a.out_dir);

@@ -91,6 +91,7 @@ int run_render(const RenderArgs& a) {
         return 2;
     }
     // What the scene can produce but this integrator cannot sample, in full-path notation.
+    for (const auto& w : scene->warnings()) desc.warnings.push_back(w);
     for (auto& w : path_space_warnings(*scene, desc.integrator.type)) desc.warnings.push_back(std::move(w));
     for (const auto& w : desc.warnings) fmt::print(stderr, "omega: warning: {}\n", w);
 

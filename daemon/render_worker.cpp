@@ -105,6 +105,7 @@ void RenderWorker::run() {
     // build must not hold up a cancel or a shutdown.
     std::unique_ptr<Scene> scene = Scene::build(desc, [this] { return stop_requested() != StopKind::none; });
     // Path classes this integrator cannot sample go with the result like any other warning.
+    for (const auto& w : scene->warnings()) desc.warnings.push_back(w);
     for (auto& w : path_space_warnings(*scene, desc.integrator.type)) desc.warnings.push_back(std::move(w));
 
     std::shared_ptr<const FilmSnapshot> resume = spec_.resume;

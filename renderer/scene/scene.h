@@ -70,6 +70,11 @@ public:
     // Any hit within (0, ray.tmax). Thread-safe.
     bool occluded(const Ray& ray) const;
 
+    // What the build accepted but the user should know (degenerate triangles dropped), one line
+    // per shape, "FILE:LINE: shapes[i] 'name' (mesh.obj): ...". Callers add them to the scene's
+    // warnings, which reach the EXR header and the daemon's job.
+    const std::vector<std::string>& warnings() const { return warnings_; }
+
     const std::vector<Shape>& shapes() const { return shapes_; }
     const std::vector<Bsdf>& materials() const { return materials_; }
     const std::vector<Light>& lights() const { return lights_; }
@@ -90,6 +95,7 @@ private:
     void add_embree_geometry(const std::function<bool()>& cancelled);
 
     SceneDesc desc_;
+    std::vector<std::string> warnings_;
     RTCDevice device_ = nullptr;
     RTCScene rtc_ = nullptr;
     std::vector<Shape> shapes_;

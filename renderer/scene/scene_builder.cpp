@@ -139,7 +139,18 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
             else sh.mesh.uvs.clear();  // nothing looks them up
             auto tf = Transform::make(sd.to_world);
             if (!tf) throw SceneError(fmt::format("{}: {}.to_world: matrix is singular", where(sd.loc), sh.name));
-            bake_mesh(sh.mesh, *tf, sd.flip_normals, sd.drop_degenerate, sd.loc, sh.name);
+            // "'DoorHandle' (door.obj)": the location's key already says shapes[i] in messages.
+            std::string label;
+            if (!sd.name.empty()) label = fmt::format("'{}'", sd.name);
+            if (sd.type == ShapeType::Mesh)
+                label += fmt::format("{}({})", label.empty() ? "" : " ", sd.written.empty() ? sd.file : sd.written);
+            const std::string key = sd.loc.key.empty() ? sh.name : sd.loc.key;
+            const std::string what = sd.loc.key.empty() ? key + (label.empty() ? "" : " " + label) : label;
+            const size_t dropped = bake_mesh(sh.mesh, *tf, sd.flip_normals, sd.drop_degenerate, sd.loc, what);
+            if (dropped)
+                s->warnings_.push_back(fmt::format("{}: {}{}: {} degenerate (zero-area) triangle{} dropped",
+                                                   where(sd.loc), key, label.empty() ? "" : " " + label, dropped,
+                                                   dropped == 1 ? "" : "s"));
             std::vector<double> areas(sh.mesh.triangle_count());
             sh.face_normals.resize(areas.size());
             for (size_t t = 0; t < areas.size(); ++t) {

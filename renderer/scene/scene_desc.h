@@ -121,7 +121,7 @@ struct ShapeDesc {
     std::optional<EmitterDesc> emitter;
     bool flip_normals = false;
     bool face_normals = false;       // mesh: ignore the file's vertex normals
-    bool drop_degenerate = false;    // mesh: skip zero-area triangles instead of failing
+    bool drop_degenerate = true;     // mesh: skip zero-area triangles (with a warning) instead of failing
     bool flip_tex_coords = true;     // mesh: v' = 1 - v (Mitsuba's default for OBJ and PLY)
     SourceLoc loc;
     std::string written;  // mesh: the file as the scene wrote it, for messages

@@ -472,7 +472,7 @@ ShapeDesc parse_shape(const ParamValue& item, size_t index, ShapeCtx& ctx) {
         s.written = f.written;
         s.file_loc = f.loc;
         s.face_normals = b.get_bool("face_normals", false);
-        s.drop_degenerate = b.get_bool("drop_degenerate", false);
+        s.drop_degenerate = b.get_bool("drop_degenerate", true);
         s.flip_tex_coords = b.get_bool("flip_tex_coords", true);
     } else {
         reject(b, "file", "by this shape type (only mesh)");

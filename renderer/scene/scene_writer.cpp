@@ -174,7 +174,7 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
             o += fmt::format("    file: {}\n", q(rel_path(sh.file, base_dir)));
             if (sh.face_normals) o += "    face_normals: true\n";
             if (!sh.flip_tex_coords) o += "    flip_tex_coords: false\n";
-            if (sh.drop_degenerate) o += "    drop_degenerate: true\n";
+            if (!sh.drop_degenerate) o += "    drop_degenerate: false\n";
         }
         if (sh.material != implicit) o += fmt::format("    material: {}\n", q(sh.material));
         if (sh.flip_normals) o += "    flip_normals: true\n";

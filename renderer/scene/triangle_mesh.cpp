@@ -97,10 +97,16 @@ size_t bake_mesh(TriangleMesh& mesh, const Transform& to_world, bool flip_normal
     if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
         throw SceneError(at + what + ": uv count differs from vertex count");
 
+    // A non-finite vertex is reported with the first triangle that uses it (below): that is what
+    // a user finds in a modelling tool. One no triangle uses is harmless and zeroed for Embree.
+    std::vector<uint8_t> bad_vertex(mesh.positions.size(), 0);
     for (size_t i = 0; i < mesh.positions.size(); ++i) {
         Vec3d p = to_world.point(Vec3d(mesh.positions[i]));
         Vec3 pf(p);
-        if (!is_finite(pf)) throw SceneError(fmt::format("{}{} vertex {} is not finite", at, what, i));
+        if (!is_finite(pf)) {
+            bad_vertex[i] = 1;
+            pf = Vec3(0.f);
+        }
         mesh.positions[i] = pf;
     }
     for (size_t i = 0; i < mesh.normals.size(); ++i) {
@@ -122,11 +128,17 @@ size_t bake_mesh(TriangleMesh& mesh, const Transform& to_world, bool flip_normal
         uint32_t a = mesh.indices[3 * t], b = mesh.indices[3 * t + 1], c = mesh.indices[3 * t + 2];
         if (a >= nv || b >= nv || c >= nv)
             throw SceneError(fmt::format("{}{} triangle {} has a vertex index out of range", at, what, t));
+        for (uint32_t v : {a, b, c})
+            if (bad_vertex[v])
+                throw SceneError(fmt::format("{}{} triangle {} has a non-finite vertex (vertex {})", at, what, t, v));
         Vec3d pa(mesh.positions[a]), pb(mesh.positions[b]), pc(mesh.positions[c]);
         double area2 = length(cross(pb - pa, pc - pa));
         if (!(area2 > 0) || !std::isfinite(area2)) {
             if (!drop_degenerate)
-                throw SceneError(fmt::format("{}{} triangle {} is degenerate (zero area)", at, what, t));
+                throw SceneError(fmt::format(
+                    "{}{} triangle {} is degenerate (zero area; drop_degenerate: true, the default, drops such "
+                    "triangles)",
+                    at, what, t));
             ++dropped;
             continue;
         }

@@ -53,8 +53,9 @@ TriangleMesh load_mesh_file(const FileGate& gate, const std::string& path, const
                             const MeshFileOptions& options = {});
 
 // Applies to_world (normals by the inverse transpose, in double), flips normals if asked, and
-// validates: non-finite positions and zero-area triangles are errors naming the shape and the
-// triangle, unless drop_degenerate is set, in which case they are removed and counted.
+// validates: a triangle with a non-finite vertex is an error naming the shape (and file) and the
+// triangle; zero-area triangles are too unless drop_degenerate is set, in which case they are
+// removed and counted (exported meshes routinely hold a few).
 // Returns the number of dropped triangles.
 size_t bake_mesh(TriangleMesh& mesh, const Transform& to_world, bool flip_normals, bool drop_degenerate,
                  const SourceLoc& loc, const std::string& what);

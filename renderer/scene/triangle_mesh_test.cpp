@@ -168,14 +168,17 @@ TEST(TriangleMesh, DegenerateTrianglesNameSceneLineShapeAndTriangle) {
     ASSERT_EQ(m.triangle_count(), 3u);
     TriangleMesh copy = m;
     EXPECT_EQ(scene_error_of([&] { bake_mesh(copy, xf(s.to_world), false, false, s.loc, "mesh 'x.obj'"); }),
-              path + ":5: shapes[2]: mesh 'x.obj' triangle 1 is degenerate (zero area)");
+              path + ":5: shapes[2]: mesh 'x.obj' triangle 1 is degenerate (zero area; drop_degenerate: true, the "
+                     "default, drops such triangles)");
     EXPECT_EQ(bake_mesh(m, xf(s.to_world), false, true, s.loc, "mesh 'x.obj'"), 1u);
     EXPECT_EQ(m.triangle_count(), 2u);
 
-    // Non-finite positions after the transform are errors too.
+    // Non-finite positions after the transform are errors too, dropped or not, naming the first
+    // triangle that uses one.
     TriangleMesh big = make_rectangle();
-    EXPECT_EQ(scene_error_of([&] { bake_mesh(big, xf(Mat4::scale({1e300, 1e300, 1e300})), false, false, s.loc, "rect"); }),
-              path + ":5: shapes[2]: rect vertex 0 is not finite");
+    big.normals.clear();
+    EXPECT_EQ(scene_error_of([&] { bake_mesh(big, xf(Mat4::scale({1e300, 1e300, 1e300})), false, true, s.loc, "rect"); }),
+              path + ":5: shapes[2]: rect triangle 0 has a non-finite vertex (vertex 0)");
 }
 
 TEST(TriangleMesh, LoadErrors) {

@@ -117,8 +117,11 @@ TEST_F(CliTest, BadScenesExitWithCodeTwoAndNameTheProblem) {
                                "{matrix: [1, 0, 0, 0, 0, .nan, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}"),
          "to_world"},
         {"degenerate_triangles", replace("{type: sphere, center: [0, 0, 0], radius: 1, material: white}",
-                                         "{type: mesh, file: degenerate.obj, material: white}"),
+                                         "{type: mesh, file: degenerate.obj, material: white, drop_degenerate: false}"),
          "degenerate"},
+        {"only_degenerate_triangles", replace("{type: sphere, center: [0, 0, 0], radius: 1, material: white}",
+                                              "{type: mesh, file: degenerate.obj, material: white}"),
+         "no triangles left"},
         {"wrong_type", replace("fov: 40", "fov: wide"), "fov"},
     };
     for (const auto& c : cases) {
@@ -180,6 +183,23 @@ TEST_F(CliTest, PartsRenderedApartMergeToTheSingleRender) {
     EXPECT_FALSE(fs::exists(path("bad.exr")));
     EXPECT_EQ(run("render " + scene + " --samples 5:5 -o " + path("x.exr")).code, 2);
     EXPECT_EQ(run("render " + scene + " --samples 0:4 --spp 4 -o " + path("x.exr")).code, 2);
+}
+
+// A mesh as exported (one zero-area triangle among good ones) renders, with one warning on stderr
+// and in the EXR header.
+TEST_F(CliTest, DegenerateTrianglesAreDroppedWithAWarning) {
+    write("quad.obj", "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv 0 -1 0\nf 1 2 3\nf 1 3 4\nf 1 5 2\n");
+    std::string text = kGood;
+    const std::string sphere = "{type: sphere, center: [0, 0, 0], radius: 1, material: white}";
+    text.replace(text.find(sphere), sphere.size(), "{type: mesh, name: Panel, file: quad.obj, material: white}");
+    std::string scene = write("mesh.yaml", text);
+    std::string out = (dir_ / "mesh.exr").string();
+    CmdResult r = run("render " + scene + " -o " + out + " --spp 1 -q");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string w = "shapes[0] 'Panel' (quad.obj): 1 degenerate (zero-area) triangle dropped";
+    EXPECT_NE(r.output.find("warning: "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(w), std::string::npos) << r.output;
+    EXPECT_NE(omega::read_exr(out).attributes["omega.warnings"].find(w), std::string::npos);
 }
 
 TEST_F(CliTest, UsageErrorsExitWithCodeTwo) {

@@ -95,14 +95,51 @@ INSTANTIATE_TEST_SUITE_P(Integrators, ClosedMesh,
                          ::testing::Values(IntegratorType::Path, IntegratorType::Light, IntegratorType::Bdpt),
                          [](const auto& info) { return std::string(stability::name_of(info.param)); });
 
-TEST(ZeroAreaTriangles, AreAnErrorByDefault) {
+// Exported meshes routinely hold zero-area triangles: by default they are dropped and counted in
+// one warning naming the shape and the file; drop_degenerate: false restores the strict error.
+TEST(ZeroAreaTriangles, AreDroppedWithOneWarningByDefault) {
     SceneDesc d = mesh_furnace(write_cube_obj(true), IntegratorType::Path, 0.8f, 0.5f, true);
-    ASSERT_FALSE(d.shapes[0].drop_degenerate);
+    d.shapes[0].name = "DoorHandle";
+    d.shapes[0].written = "door.obj";
+    ASSERT_TRUE(d.shapes[0].drop_degenerate);
+    auto scene = Scene::build(d);
+    ASSERT_EQ(scene->warnings().size(), 1u);
+    const std::string& w = scene->warnings()[0];
+    EXPECT_NE(w.find("shapes[0] 'DoorHandle' (door.obj): 3 degenerate (zero-area) triangles dropped"), std::string::npos)
+        << w;
+    EXPECT_EQ(scene->shapes()[0].mesh.triangle_count(), 12u);
+
+    d.shapes[0].drop_degenerate = false;
     try {
         Scene::build(d);
-        ADD_FAILURE() << "a mesh with zero-area triangles was accepted";
+        ADD_FAILURE() << "a mesh with zero-area triangles was accepted with drop_degenerate: false";
     } catch (const SceneError& e) {
-        EXPECT_NE(std::string(e.what()).find("degenerate"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("triangle 12 is degenerate"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("door.obj"), std::string::npos) << e.what();
+    }
+}
+
+// A NaN or infinite vertex would render a wrong image: always an error naming the file and the
+// first triangle that uses it. One no triangle uses is harmless.
+TEST(NonFiniteVertices, AreAnErrorNamingFileAndTriangle) {
+    const std::string path = ::testing::TempDir() + "omega_stab_nan_vertex.obj";
+    {
+        std::ofstream f(path);
+        f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 1 1\nv 1 inf 1\n"
+             "f 1 2 3\nf 1 3 2\nf 2 4 3\n";
+    }
+    SceneDesc d = mesh_furnace(path, IntegratorType::Path, 0.8f, 0.5f, true);
+    d.shapes[0].written = "nan.obj";
+    for (bool drop : {true, false}) {
+        d.shapes[0].drop_degenerate = drop;
+        try {
+            Scene::build(d);
+            ADD_FAILURE() << "a NaN vertex was accepted";
+        } catch (const SceneError& e) {
+            EXPECT_NE(std::string(e.what()).find("(nan.obj) triangle 2 has a non-finite vertex (vertex 3)"),
+                      std::string::npos)
+                << e.what();
+        }
     }
 }
 
