@@ -112,6 +112,8 @@ YAML::Node Importer::colour(pugi::xml_node c, const std::string& key, bool textu
     if (tag == "spectrum") {
         auto parts = split_numbers(v);
         if (parts.size() == 1 && parts[0].find(':') == std::string::npos) return YAML::Node(parts[0]);
+        // Mitsuba 0.x's default build has 3 spectral samples, its RGB: Bitterli's 0.6 files rely on it.
+        if (legacy_ && parts.size() == 3 && v.find(':') == std::string::npos) return list3(parts[0], parts[1], parts[2]);
         // Wavelength:value pairs: Omega is RGB; the flat average is the best it can do.
         double sum = 0;
         int n = 0;

@@ -156,6 +156,12 @@ void Importer::read_integrator(pugi::xml_node n) {
         }
     if (auto c = find_param(e, "hide_emitters"))
         if (attr(c, "value", key) == "true") warn(c, key, "hide_emitters is not supported; emitters stay visible");
+    // Omega's walks always drop a direction whose side the shading and geometric normals disagree
+    // on, which is what strictNormals asks for (0.6 exports set it).
+    if (auto c = find_param(e, "strict_normals"))
+        if (attr(c, "value", key) != "true")
+            warn(c, key, "strict_normals false is not supported: Omega always discards paths whose shading and "
+                         "geometric normals disagree about the side");
     warn_unused(e);
     desc_.integrator = checked(key, n, lines, [&](ParamValue v) {
         return parse_integrator_value(ParamValue(y, v.path(), fname_, v.line()));
@@ -187,7 +193,12 @@ void Importer::read_sensor(pugi::xml_node n) {
         std::string fkey = key + ".film";
         Elem f{film_el, fkey, {}};
         std::string ftype = attr(film_el, "type", fkey);
-        if (ftype != "hdrfilm") warn(film_el, fkey, "film '" + ftype + "' is not supported; using an RGB EXR film");
+        // ldrfilm (Bitterli's 0.6 exports) is the same radiance estimate, tone-mapped on output;
+        // Omega's output is always the HDR image, so its tone-mapping parameters have nothing to
+        // change (docs/scene-format.md, "Mitsuba XML").
+        const bool ldr = ftype == "ldrfilm";
+        if (ftype != "hdrfilm" && !ldr)
+            warn(film_el, fkey, "film '" + ftype + "' is not supported; using an RGB EXR film");
         lines["film"] = line_of(film_el);
         if (auto c = find_param(f, "width")) width = int(number(c, fkey));
         if (auto c = find_param(f, "height")) height = int(number(c, fkey));
@@ -195,10 +206,13 @@ void Importer::read_sensor(pugi::xml_node n) {
             if (auto c = find_param(f, fmt_key)) {
                 std::string v = attr(c, "value", fkey);
                 static const std::set<std::string> ok = {"openexr", "exr", "rgb", "rgba", "float16", "float32"};
-                if (!ok.count(v))
+                if (!ok.count(v) && !ldr)
                     warn(c, fkey, fmt::format("{} '{}' is not supported; Omega writes RGB float EXR", fmt_key, v));
             }
         }
+        if (ldr)
+            for (const char* p : {"gamma", "exposure", "tonemap_method", "key", "burn", "banner", "high_quality_edges"})
+                (void)find_param(f, p);
         int cx = 0, cy = 0, cw = width, ch = height;
         bool crop = false;
         if (auto c = find_param(f, "crop_offset_x")) cx = int(number(c, fkey)), crop = true;
@@ -267,9 +281,12 @@ void Importer::read_sensor(pugi::xml_node n) {
     if (type == "thinlens") {
         for (const char* p : {"aperture_radius", "focus_distance"})
             if (auto c = find_param(e, p)) y[p] = scalar(c, key), lines[p] = line_of(c);
+    } else {
+        (void)find_param(e, "focus_distance");  // a pinhole is in focus everywhere (0.6 exports write it)
     }
     if (auto c = find_param(e, "near_clip")) y["near_clip"] = scalar(c, key), lines["near_clip"] = line_of(c);
-    if (auto c = find_param(e, "far_clip")) warn(c, key, "far_clip is not supported; nothing is clipped far away");
+    // Omega does not clip far away; the scene build warns if any geometry lies beyond far_clip.
+    if (auto c = find_param(e, "far_clip")) y["far_clip"] = scalar(c, key), lines["far_clip"] = line_of(c);
     if (auto c = find_param(e, "to_world")) {
         Mat4 m = to_world(c, key + ".to_world");
         YAML::Node l(YAML::NodeType::Sequence);
@@ -471,8 +488,7 @@ SceneDesc Importer::run() {
     std::string version = scene.attribute("version").as_string();
     if (version.empty()) warn(scene, "scene", "no version attribute; reading it as Mitsuba 3");
     else if (version[0] == '0' || version[0] == '1') {
-        legacy_ = true;
-        warn(scene, "scene", "a Mitsuba " + version + " scene: camelCase parameter names are read as Mitsuba 3's snake_case");
+        legacy_ = true;  // camelCase names are read as Mitsuba 3's snake_case: nothing to warn about
     }
     read_defaults(scene);
     // Ids anywhere in the file (Mitsuba allows references to any named object).

@@ -187,6 +187,22 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
     poll();
     s->add_embree_geometry(cancelled);
 
+    // A far clipping plane that cuts nothing changes nothing; one that would is not honoured.
+    if (const SensorDesc& sd = desc.sensor; std::isfinite(sd.far_clip) && s->bounds_.lo.x <= s->bounds_.hi.x) {
+        const Vec3d eye = sd.to_world.point({0, 0, 0}), axis = normalize(sd.to_world.vector({0, 0, 1}));
+        double farthest = 0;
+        for (int c = 0; c < 8; ++c) {
+            const Vec3d corner((c & 1 ? s->bounds_.hi : s->bounds_.lo).x, (c & 2 ? s->bounds_.hi : s->bounds_.lo).y,
+                               (c & 4 ? s->bounds_.hi : s->bounds_.lo).z);
+            farthest = std::max(farthest, dot(corner - eye, axis));
+        }
+        if (farthest > sd.far_clip)
+            s->warnings_.push_back(fmt::format(
+                "{}: sensor.far_clip: geometry lies up to {:.4g} along the view axis, beyond far_clip {:.4g}; Omega "
+                "does not clip far away, so it renders what a clipping renderer would hide",
+                where(sd.loc), farthest, sd.far_clip));
+    }
+
     std::vector<double> power;
     for (const Light& l : s->lights_) power.push_back(light_power(*s, l));
     s->light_select_ = DiscreteDistribution(power);

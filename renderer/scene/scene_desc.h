@@ -5,6 +5,7 @@
 #include <array>
 #include <map>
 #include <memory>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -76,6 +77,9 @@ struct SensorDesc {
     float aperture_radius = 0.f;  // thin_lens, world units
     float focus_distance = 1.f;   // thin_lens, world units
     float near_clip = 0.f;        // world units along the ray
+    // Mitsuba's far clipping plane, kept only to warn: Omega never clips far away, and the build
+    // says so when geometry lies beyond it (infinity: none given).
+    float far_clip = std::numeric_limits<float>::infinity();
     FilmDesc film;
     HaltDesc halt;
     SourceLoc loc;

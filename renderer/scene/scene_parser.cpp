@@ -426,6 +426,7 @@ void parse_sensor(ParamBag b, SensorDesc& s) {
     }
     if (auto v = b.get("to_world")) s.to_world = parse_to_world(*v);
     s.near_clip = float_in(b, "near_clip", s.near_clip, 0, false, kInf, false);
+    s.far_clip = float_in(b, "far_clip", s.far_clip, 0, true, kInf, false);
     if (auto f = b.opt_bag("film")) parse_film(*f, s.film);
     else s.film.crop = {0, 0, s.film.width, s.film.height};
     if (auto v = b.get("spp")) s.halt.spp = v->as_int(1, 1LL << 40);

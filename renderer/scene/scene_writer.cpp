@@ -145,6 +145,7 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
         o += fmt::format("  aperture_radius: {}\n  focus_distance: {}\n", num(s.aperture_radius), num(s.focus_distance));
     o += fmt::format("  to_world: {}\n", matrix(s.to_world));
     if (s.near_clip != 0) o += fmt::format("  near_clip: {}\n", num(s.near_clip));
+    if (std::isfinite(s.far_clip)) o += fmt::format("  far_clip: {}\n", num(s.far_clip));
     const FilmDesc& f = s.film;
     o += fmt::format("  film: {{width: {}, height: {}, filter: {}", f.width, f.height, filter_name(f.filter));
     if (f.filter == FilterType::Gaussian) o += fmt::format(", stddev: {}", num(f.gaussian_stddev));
