@@ -554,24 +554,25 @@ private:
 };
 
 // The samples to render: the job's spp, else the scene's (64 when it names no halt). A time or
-// error halt cannot be cut into sample ranges.
-uint64_t frame_spp(const BatchEntry& e) {
+// error halt cannot be cut into sample ranges. The scene is parsed either way, so a bad one stops
+// the batch (exit 2) before anything is submitted.
+uint64_t frame_spp(const BatchEntry& e, std::map<std::string, HaltDesc>& parsed) {
+    auto it = parsed.find(e.scene);
+    if (it == parsed.end()) {
+        try {
+            it = parsed.emplace(e.scene, parse_scene_file(e.scene).sensor.halt).first;
+        } catch (const SceneError& x) {
+            throw ClientError(kExitBadInput, fmt::format("{}\n  (scene of the job at {})", x.what(), e.where));
+        }
+    }
     if (e.spec.halt.spp) return *e.spec.halt.spp;
     if (e.spec.halt.time_s || e.spec.halt.target_error)
         throw ClientError(kExitBadInput, fmt::format("{}: {}: --slurm splits a sample count; give the job `spp`, not "
                                                      "`time` or `target_error`", e.where, e.label));
-    SceneDesc desc;
-    try {
-        desc = parse_scene_file(e.scene);
-    } catch (const SceneError& x) {
-        throw ClientError(kExitBadInput, fmt::format("{}\n  (scene of the job at {})", x.what(), e.where));
-    }
-    const HaltDesc& h = desc.sensor.halt;
-    if (h.time_s || h.target_error) {
-        if (h.spp) return uint64_t(*h.spp);
-        throw ClientError(kExitBadInput, fmt::format("{}: {}: the scene halts on time or error, which --slurm cannot split; "
-                                                     "give the job `spp`", e.where, e.label));
-    }
+    const HaltDesc& h = it->second;
+    if (h.time_s || h.target_error)
+        throw ClientError(kExitBadInput, fmt::format("{}: {}: the scene halts on time or error, which --slurm cannot "
+                                                     "split; give the job `spp`", e.where, e.label));
     return h.spp ? uint64_t(*h.spp) : 64;
 }
 
@@ -583,9 +584,10 @@ std::vector<BatchResult> run_slurm_batch(const BatchManifest& m, bool dry_run, s
     const std::string omega_bin = ec ? "omega" : self.string();
     // Every scene is read before anything is submitted: a bad one stops the batch at once.
     std::vector<Frame> frames;
+    std::map<std::string, HaltDesc> parsed;
     for (size_t i = 0; i < m.jobs.size(); ++i) {
         Frame f;
-        f.plan = plan_frame(m, i, frame_spp(m.jobs[i]), omega_bin);
+        f.plan = plan_frame(m, i, frame_spp(m.jobs[i], parsed), omega_bin);
         f.chunks.resize(f.plan.chunks.size());
         frames.push_back(std::move(f));
     }
