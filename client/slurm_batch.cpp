@@ -71,6 +71,8 @@ FramePlan plan_frame(const BatchManifest& m, size_t index, uint64_t spp, const s
     f.entry = &e;
     f.spp = spp;
     f.chunks = split_samples(spp, s.chunks);
+    f.scene = fs::absolute(e.scene).lexically_normal().string();
+    f.output = fs::absolute(e.output).lexically_normal().string();
     f.omega = s.omega.value_or(omega_bin);
     const fs::path root = s.work_dir ? fs::path(*s.work_dir) : fs::absolute(fs::path(m.output_dir) / ".omega-slurm");
     const fs::path work = root / fmt::format("{:04}-{}", index + 1, fs::path(e.output).stem().string());
@@ -90,7 +92,7 @@ FramePlan plan_frame(const BatchManifest& m, size_t index, uint64_t spp, const s
     for (size_t k = 0; k < f.chunks.size(); ++k)
         r += fmt::format("  {}) samples={}:{} part={} ;;\n", k, f.chunks[k].begin, f.chunks[k].end, sh_quote(f.parts[k]));
     r += "  *) echo \"omega batch: no chunk $SLURM_ARRAY_TASK_ID\" >&2; exit 2 ;;\nesac\n";
-    std::vector<std::string> cmd{sh_quote(f.omega), "render", sh_quote(e.scene), "--samples", "\"$samples\"",
+    std::vector<std::string> cmd{sh_quote(f.omega), "render", sh_quote(f.scene), "--samples", "\"$samples\"",
                                  "-o", "\"$part\"", "--seed", std::to_string(e.spec.seed),
                                  "--threads", std::to_string(s.cpus_per_task)};
     if (e.spec.integrator) cmd.insert(cmd.end(), {"--integrator", sh_quote(*e.spec.integrator)});
@@ -99,7 +101,7 @@ FramePlan plan_frame(const BatchManifest& m, size_t index, uint64_t spp, const s
 
     std::vector<std::string> merge{sh_quote(f.omega), "merge"};
     for (const auto& p : f.parts) merge.push_back(sh_quote(p));
-    merge.insert(merge.end(), {"-o", sh_quote(e.output)});
+    merge.insert(merge.end(), {"-o", sh_quote(f.output)});
     f.merge_text = fmt::format(
         "#!/bin/bash\n"
         "# omega batch --slurm: merges the {} part(s) of {} ({}) into its output. Submitted afterok of\n"
@@ -122,7 +124,7 @@ std::vector<std::string> common_args(const SlurmSettings& s, const FramePlan& f,
 }  // namespace
 
 std::vector<std::string> render_sbatch_args(const SlurmSettings& s, const FramePlan& f, const std::string& tasks) {
-    auto a = common_args(s, f, "omega-render-" + fs::path(f.entry->output).stem().string());
+    auto a = common_args(s, f, "omega-render-" + fs::path(f.output).stem().string());
     a.push_back("--array=" + tasks);
     a.push_back(fmt::format("--cpus-per-task={}", s.cpus_per_task));
     a.push_back("--output=" + f.work + "/render_%A_%a.log");
@@ -132,7 +134,7 @@ std::vector<std::string> render_sbatch_args(const SlurmSettings& s, const FrameP
 }
 
 std::vector<std::string> merge_sbatch_args(const SlurmSettings& s, const FramePlan& f, const std::string& dependency) {
-    auto a = common_args(s, f, "omega-merge-" + fs::path(f.entry->output).stem().string());
+    auto a = common_args(s, f, "omega-merge-" + fs::path(f.output).stem().string());
     a.push_back("--cpus-per-task=1");
     a.push_back("--output=" + f.work + "/merge_%j.log");
     if (!dependency.empty()) {
@@ -367,7 +369,7 @@ private:
         try {
             std::error_code ec;
             fs::create_directories(f.plan.work, ec);
-            const fs::path out_parent = fs::path(f.plan.entry->output).parent_path();
+            const fs::path out_parent = fs::path(f.plan.output).parent_path();
             if (!out_parent.empty()) fs::create_directories(out_parent, ec);
             // A part left by an earlier run must never stand in for one of this run.
             for (const auto& p : f.plan.parts) fs::remove(p, ec);
@@ -513,7 +515,7 @@ private:
         if (queued.count(f.merge)) return;
         const std::string st = final_state(f.merge, -1, "");
         if (st.empty()) return;
-        if (st == "COMPLETED" && fs::exists(f.plan.entry->output)) {
+        if (st == "COMPLETED" && fs::exists(f.plan.output)) {
             f.finished = true;
             r.state = "done";
             r.exit_code = kExitOk;
@@ -523,7 +525,7 @@ private:
                 std::error_code ec;
                 for (const auto& p : f.plan.parts) fs::remove(p, ec);
             }
-            say(i, "done: merge job {} wrote {}", f.merge, f.plan.entry->output);
+            say(i, "done: merge job {} wrote {}", f.merge, f.plan.output);
             return;
         }
         const std::string why = fmt::format("merge job {} ended {} (log: {}/merge_{}.log)", f.merge,
@@ -594,7 +596,7 @@ std::vector<BatchResult> run_slurm_batch(const BatchManifest& m, bool dry_run, s
     if (dry_run) {
         for (size_t i = 0; i < frames.size(); ++i) {
             const FramePlan& p = frames[i].plan;
-            fmt::print(out, "# [{}/{}] {} -> {}\n# {}:\n{}", i + 1, frames.size(), p.entry->label, p.entry->output,
+            fmt::print(out, "# [{}/{}] {} -> {}\n# {}:\n{}", i + 1, frames.size(), p.entry->label, p.output,
                        p.render_script, p.render_text);
             auto q = [](std::vector<std::string> v) {
                 for (auto& a : v) a = sh_quote(a);

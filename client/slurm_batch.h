@@ -32,6 +32,7 @@ struct FramePlan {
     const BatchEntry* entry = nullptr;
     uint64_t spp = 0;
     std::vector<Chunk> chunks;
+    std::string scene, output;  // absolute: the tasks run in the work folder, on other machines
     std::string omega;   // binary on the nodes
     std::string work;    // folder for scripts, parts and logs
     std::string render_script, merge_script;  // paths in work
