@@ -279,6 +279,7 @@ struct Frame {
 // What Slurm knows about one job or array, read once per poll.
 struct Lookup {
     bool known = false;  // scontrol has the job
+    bool failed = false;  // scontrol itself failed (not "no such job"): look again next poll
     std::vector<JobRecord> records;
 };
 
@@ -409,6 +410,8 @@ private:
         if (r.status == 0) {
             l.known = true;
             l.records = parse_scontrol(r.out);
+        } else if (r.err.find("Invalid job id") == std::string::npos && r.err.find("not found") == std::string::npos) {
+            l.failed = true;
         }
         return cache_.emplace(id, std::move(l)).first->second;
     }
@@ -417,6 +420,7 @@ private:
     // has left squeue. Empty when it is still pending or running.
     std::string final_state(const std::string& id, int task, const std::string& part) {
         const Lookup& l = lookup(id);
+        if (l.failed) return "";
         if (l.known) {
             for (const auto& r : l.records) {
                 const bool match = task < 0 ? r.job_id == id

@@ -21,7 +21,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "support"))
 from slurm_cluster import SlurmCluster  # noqa: E402
 
-OMEGA, EXR_COMPARE, SOURCE_DIR = sys.argv[1:4]
+OMEGA, EXR_COMPARE, SOURCE_DIR = (os.path.abspath(a) for a in sys.argv[1:4])
 SPP = 16
 SLOW = 4 if os.environ.get("OMEGA_SANITIZER") else 1
 
@@ -158,7 +158,7 @@ jobs:
             check(re.search(rf"merge job \d+ \(afterok:[0-9_:]*{replacement}_2\b", err),
                   "the new merge job does not depend on the replacement task")
             check(re.search(rf"\[1/3\].*job array \d+: {SPP} spp in 4 chunk\(s\)", err), "frame 1's array line")
-            rows = [l.split() for l in out.splitlines() if re.match(r"^\d+\s", l)]
+            rows = [l.split() for l in out.splitlines() if re.match(r"^\d+\s+scenes/", l)]
             # Columns: #, SCENE (two words: the file and frame=N), JOB, STATE, TRIES, SPP, TIME, OUTPUT.
             check(len(rows) == 3 and all(r[4] == "done" and r[6] == str(SPP) for r in rows), "three frames done", out)
             check(rows[1][3] == array2 and rows[1][5] == "2", "frame 2: its array id, 2 tries", out)
