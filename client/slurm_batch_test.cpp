@@ -4,6 +4,9 @@
 // tests/slurm/test_slurm_batch.py.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <cstdlib>
+
 #include "batch_command.h"
 #include "slurm_batch.h"
 #include "test_fake_daemon.h"
@@ -190,6 +193,46 @@ TEST(SlurmProcess, CollectsOutputAndStatusWithoutAShell) {
         EXPECT_EQ(e.exit_code(), kExitUnreachable);
         EXPECT_STREQ(e.what(), "cannot run omega-no-such-program: No such file or directory");
     }
+}
+
+TEST(SlurmDryRun, PrintsScriptsAndCommandsAndRunsNoSlurmCommand) {
+    TempDir d;
+    d.write("a.yaml", "omega: 1\nlights: [{type: constant, radiance: 1}]\n");  // no halt: 64 spp
+    const auto p = d.write("m.yaml", "slurm: {chunks: 2}\njobs:\n  - {scene: a.yaml}\n  - {scene: a.yaml, output: b.exr, spp: 3}\n");
+    const BatchManifest m = parse_manifest(p.string());
+    // No Slurm command may run: with an empty PATH, any attempt would fail the call.
+    const std::string old_path = std::getenv("PATH") ? std::getenv("PATH") : "";
+    setenv("PATH", (d.path / "empty").c_str(), 1);
+    std::FILE* out = std::tmpfile();
+    std::vector<BatchResult> r;
+    EXPECT_NO_THROW(r = run_slurm_batch(m, true, out, nullptr));
+    setenv("PATH", old_path.c_str(), 1);
+    EXPECT_TRUE(r.empty());
+    std::rewind(out);
+    std::string text;
+    for (int c; (c = std::fgetc(out)) != EOF;) text += char(c);
+    std::fclose(out);
+    EXPECT_NE(text.find("samples=0:32 "), std::string::npos) << text;
+    EXPECT_NE(text.find("samples=32:64 "), std::string::npos) << text;
+    EXPECT_NE(text.find("samples=2:3 "), std::string::npos) << text;
+    EXPECT_NE(text.find("$ sbatch '--parsable' '--job-name=omega-render-a'"), std::string::npos) << text;
+    EXPECT_NE(text.find("'--dependency=afterok:ARRAY_JOB_ID'"), std::string::npos) << text;
+    EXPECT_FALSE(fs::exists(d.path / ".omega-slurm"));  // nothing written
+
+    // A halt that is not a sample count cannot be split.
+    const auto q = d.write("t.yaml", "jobs:\n  - {scene: a.yaml, time: 3}\n");
+    try {
+        run_slurm_batch(parse_manifest(q.string()), true, nullptr, nullptr);
+        FAIL() << "a time halt was accepted";
+    } catch (const ClientError& e) {
+        EXPECT_EQ(e.exit_code(), kExitBadInput);
+        EXPECT_EQ(std::string(e.what()), q.string() + ":2: a.yaml: --slurm splits a sample count; give the job `spp`, "
+                                                      "not `time` or `target_error`");
+    }
+    // A bad scene stops the batch before anything is submitted.
+    d.write("bad.yaml", "omega: 1\nshapes: 3\n");
+    const auto b = d.write("b.yaml", "jobs:\n  - {scene: bad.yaml, spp: 4}\n");
+    EXPECT_THROW(run_slurm_batch(parse_manifest(b.string()), true, nullptr, nullptr), ClientError);
 }
 
 }  // namespace
