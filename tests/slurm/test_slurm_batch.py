@@ -158,14 +158,19 @@ jobs:
             check(re.search(rf"merge job \d+ \(afterok:[0-9_:]*{replacement}_2\b", err),
                   "the new merge job does not depend on the replacement task")
             check(re.search(rf"\[1/3\].*job array \d+: {SPP} spp in 4 chunk\(s\)", err), "frame 1's array line")
+            # Frame 2's first merge (afterok of the array with the cancelled task) never ran.
+            first_merge = re.search(rf"\[2/3\].*merge job (\d+) \(afterok:{array2}\)", err)
+            check(first_merge, "frame 2's first merge job line")
+            work2 = os.path.join(work, "renders", ".omega-slurm", "0002-frame_02")
+            check(not os.path.exists(os.path.join(work2, f"merge_{first_merge.group(1)}.log")),
+                  "the merge that waited on the cancelled task ran")
             rows = [l.split() for l in out.splitlines() if re.match(r"^\d+\s+scenes/", l)]
             # Columns: #, SCENE (two words: the file and frame=N), JOB, STATE, TRIES, SPP, TIME, OUTPUT.
             check(len(rows) == 3 and all(r[4] == "done" and r[6] == str(SPP) for r in rows), "three frames done", out)
             check(rows[1][3] == array2 and rows[1][5] == "2", "frame 2: its array id, 2 tries", out)
             check(rows[0][5] == "1" and rows[2][5] == "1", "frames 1 and 3 took one try", out)
             check("3 of 3 job(s) done, 0 failed" in out, "summary line", out)
-            check(not [p for p in os.listdir(os.path.join(work, "renders", ".omega-slurm", "0002-frame_02"))
-                       if p.endswith(".exr")], "part EXRs kept after the merge")
+            check(not [p for p in os.listdir(work2) if p.endswith(".exr")], "part EXRs kept after the merge")
 
             # Every merged frame equals its local render of the same spp.
             for i in (1, 2, 3):

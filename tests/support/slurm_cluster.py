@@ -9,7 +9,13 @@ Starting takes about 1-2 s; stopping about 1-3 s. Needs root: SlurmUser and Slur
 (slurmd must be able to start job steps as the submitting user) and munged's key must be owned by
 the user it runs as. Runs in a container without systemd: the daemons run in the foreground as
 children of this process, proctrack/linuxproc and task/none avoid cgroups. Standard library only.
+
+Cleanup: stop() (also on an exception in the with block) cancels every job, shuts the daemons down
+and removes the folder. If the test process is SIGKILLed (a ctest timeout), the daemons still get
+SIGTERM (PR_SET_PDEATHSIG), but a job step that was running (slurmstepd and its processes) lives
+on until its own command ends.
 """
+import ctypes
 import os
 import shutil
 import signal
@@ -29,6 +35,13 @@ def _free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def _die_with_parent():
+    """preexec_fn: the daemon gets SIGTERM when this process dies, even by SIGKILL (a ctest timeout),
+    so no munged or slurmctld outlives a test that could not run its cleanup."""
+    PR_SET_PDEATHSIG = 1
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 def _tail(path, n=15):
@@ -134,7 +147,7 @@ PartitionName=test Nodes={self.node} Default=YES MaxTime=INFINITE State=UP OverS
     def _spawn(self, name, args):
         out = open(self.log(name + ".stdio"), "w")
         self.procs[name] = subprocess.Popen(args, stdout=out, stderr=subprocess.STDOUT, env=self.env(),
-                                            stdin=subprocess.DEVNULL)
+                                            stdin=subprocess.DEVNULL, preexec_fn=_die_with_parent)
         out.close()
 
     def start(self):
