@@ -31,6 +31,11 @@ class SlurmUnavailable(RuntimeError):
     """Slurm cannot run here; the message says exactly why (tests fail with it, never skip)."""
 
 
+def _which(program):
+    """PATH, then the sbin folders: the daemons live in /usr/sbin, which a non-login PATH may lack."""
+    return shutil.which(program) or shutil.which(program, path="/usr/sbin:/sbin:/usr/local/sbin")
+
+
 def _free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -77,7 +82,7 @@ class SlurmCluster:
         if os.geteuid() != 0:
             raise SlurmUnavailable("the test Slurm cluster needs root (SlurmUser=root starts job steps "
                                    f"as the submitting user); running as uid {os.geteuid()}")
-        missing = [p for p in PROGRAMS if not shutil.which(p)]
+        missing = [p for p in PROGRAMS if not _which(p)]
         if missing:
             raise SlurmUnavailable(f"missing programs {', '.join(missing)} (scripts/install-deps installs "
                                    "munge, slurmctld, slurmd, slurm-client)")
@@ -98,11 +103,11 @@ class SlurmCluster:
         os.chmod(os.path.join(self.base, "munge"), 0o755)
         os.chmod(self.base, 0o755)
         key = os.path.join(self.base, "munge", "munge.key")
-        subprocess.run(["mungekey", "-c", "-k", key], check=True, capture_output=True)
+        subprocess.run([_which("mungekey"), "-c", "-k", key], check=True, capture_output=True)
         os.chmod(key, 0o600)
         # The node's line from slurmd -C (the real CPUs, sockets, memory): a node that registers
         # with fewer resources than slurm.conf claims is drained as "Low CPUs"/"Low RealMemory".
-        hw = subprocess.run(["slurmd", "-C"], check=True, capture_output=True, text=True).stdout.splitlines()[0]
+        hw = subprocess.run([_which("slurmd"), "-C"], check=True, capture_output=True, text=True).stdout.splitlines()[0]
         hw = "NodeName=" + self.node + " " + hw.split(" ", 1)[1]
         self.ctld_port, self.slurmd_port = _free_port(), _free_port()
         b = self.base
@@ -146,7 +151,7 @@ PartitionName=test Nodes={self.node} Default=YES MaxTime=INFINITE State=UP OverS
 
     def _spawn(self, name, args):
         out = open(self.log(name + ".stdio"), "w")
-        self.procs[name] = subprocess.Popen(args, stdout=out, stderr=subprocess.STDOUT, env=self.env(),
+        self.procs[name] = subprocess.Popen([_which(args[0])] + args[1:], stdout=out, stderr=subprocess.STDOUT, env=self.env(),
                                             stdin=subprocess.DEVNULL, preexec_fn=_die_with_parent)
         out.close()
 
@@ -210,7 +215,7 @@ PartitionName=test Nodes={self.node} Default=YES MaxTime=INFINITE State=UP OverS
         try:
             return self.start()
         except BaseException:
-            self.keep = True  # the logs explain the failure
+            self.keep = bool(self.procs)  # the daemons' logs explain the failure
             self.stop()
             raise
 
