@@ -56,6 +56,15 @@ std::string one_line(std::string s) {
     return s;
 }
 
+// The last non-empty line of a job's log (omega's own "omega: ..." error), or "".
+std::string last_log_line(const std::string& path) {
+    std::ifstream in(path);
+    std::string line, last;
+    while (std::getline(in, line))
+        if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
+    return last;
+}
+
 std::string join(const std::vector<std::string>& v, const std::string& sep) {
     std::string s;
     for (size_t i = 0; i < v.size(); ++i) s += (i ? sep : "") + v[i];
@@ -490,10 +499,12 @@ private:
             for (const auto& [k, st] : failed) {
                 const Chunk& ch = f.plan.chunks[k];
                 if (f.chunks[k].attempts > retries_) {
+                    const std::string log = fmt::format("{}/render_{}_{}.log", f.plan.work, f.chunks[k].owner, k);
+                    const std::string said = one_line(last_log_line(log));
                     fail(i, kExitInternal,
-                         fmt::format("chunk {} (samples {}:{}) failed {} time(s), last as task {}_{}: {} (log: {}/render_{}_{}.log)",
-                                     k, ch.begin, ch.end, f.chunks[k].attempts, f.chunks[k].owner, k, st, f.plan.work,
-                                     f.chunks[k].owner, k));
+                         fmt::format("chunk {} (samples {}:{}) failed {} time(s), last as task {}_{}: {}{} (log: {})", k,
+                                     ch.begin, ch.end, f.chunks[k].attempts, f.chunks[k].owner, k, st,
+                                     said.empty() ? "" : ": " + said, log));
                     return;
                 }
             }
@@ -532,8 +543,11 @@ private:
             say(i, "done: merge job {} wrote {}", f.merge, f.plan.output);
             return;
         }
-        const std::string why = fmt::format("merge job {} ended {} (log: {}/merge_{}.log)", f.merge,
-                                            st == "COMPLETED" ? "COMPLETED without writing the output" : st, f.plan.work, f.merge);
+        const std::string log = fmt::format("{}/merge_{}.log", f.plan.work, f.merge);
+        const std::string said = one_line(last_log_line(log));
+        const std::string why = fmt::format("merge job {} ended {}{} (log: {})", f.merge,
+                                            st == "COMPLETED" ? "COMPLETED without writing the output" : st,
+                                            said.empty() ? "" : ": " + said, log);
         // Exit status 2 is omega merge refusing the parts: another attempt would refuse them again.
         ++f.merge_failures;
         if (f.merge_failures > retries_ || st.find("exit 2:0") != std::string::npos) {

@@ -196,7 +196,8 @@ jobs: [{scene: scenes/box_3.yaml, output: failing.exr, spp: 8}]
             sys.stderr.write(r.stderr)
             print(r.stdout, flush=True)
             check(r.returncode == 1, f"a frame that cannot render: exit {r.returncode}, not 1")
-            check(re.search(r"chunk 1 \(samples 4:8\) failed 2 time\(s\), last as task \d+_1: FAILED exit 1:0", r.stdout),
+            check(re.search(r"chunk 1 \(samples 4:8\) failed 2 time\(s\), last as task \d+_1: FAILED exit 1:0 NonZeroExitCode: "
+                            r"test: chunk 1 fails on purpose \(log: ", r.stdout),
                   "the summary names the failing chunk", r.stdout)
             check("0 of 1 job(s) done, 1 failed" in r.stdout, "summary line", r.stdout)
             check(not os.path.exists(os.path.join(work, "renders", "failing.exr")), "an incomplete set was merged")
