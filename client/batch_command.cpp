@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <atomic>
+#include <cctype>
 #include <charconv>
 #include <filesystem>
 #include <map>
@@ -14,6 +15,7 @@
 
 #include "film/film.h"
 #include "remote_common.h"
+#include "slurm_batch.h"
 
 namespace omega::client {
 
@@ -84,6 +86,63 @@ std::string substitute(const ManifestParser& P, const YAML::Node& at, const std:
     }
 }
 
+// The `slurm:` mapping. Paths in it are relative to the manifest's folder, like output_dir.
+void parse_slurm(const ManifestParser& P, const YAML::Node& v, const fs::path& dir, SlurmSettings& s) {
+    if (!v.IsMap()) P.fail(v, "slurm", "expected a mapping");
+    auto word = [&](const YAML::Node& n, const std::string& key) {
+        std::string w = P.str(n, key);
+        if (w.empty() || w.find_first_of(" \t\r\n") != std::string::npos) P.fail(n, key, "expected one word");
+        return w;
+    };
+    auto path = [&](const YAML::Node& n, const std::string& key) {
+        fs::path p = P.str(n, key);
+        if (p.empty()) P.fail(n, key, "expected a path");
+        return (p.is_relative() ? fs::absolute(dir / p) : p).lexically_normal().string();
+    };
+    for (const auto& kv : v) {
+        const std::string k = kv.first.Scalar();
+        const std::string key = "slurm." + k;
+        const YAML::Node& x = kv.second;
+        if (k == "partition") s.partition = word(x, key);
+        else if (k == "chunks") s.chunks = int(P.integer(x, key, 1, 10000));
+        else if (k == "time_limit") {
+            // sbatch's own formats: minutes, MM:SS, HH:MM:SS, D-HH[:MM[:SS]], or UNLIMITED.
+            std::string t = word(x, key);
+            if (t != "UNLIMITED" && t != "INFINITE" &&
+                (t.find_first_not_of("0123456789:-") != std::string::npos || !std::isdigit(uint8_t(t.front())) ||
+                 !std::isdigit(uint8_t(t.back()))))
+                P.fail(x, key, "expected minutes, [D-]HH:MM:SS or UNLIMITED");
+            s.time_limit = t;
+        } else if (k == "retries") s.retries = int(P.integer(x, key, 0, 100));
+        else if (k == "cpus_per_task") s.cpus_per_task = int(P.integer(x, key, 1, 4096));
+        else if (k == "poll_interval") {
+            // A floor, because every poll forks squeue and scontrol against a shared controller.
+            s.poll_interval_s = P.number(x, key, 0, 3600);
+            if (s.poll_interval_s < SlurmSettings::kMinPollInterval)
+                P.fail(x, key, fmt::format("at least {} s (each poll queries the Slurm controller)", SlurmSettings::kMinPollInterval));
+        }
+        else if (k == "omega") s.omega = path(x, key);
+        else if (k == "work_dir") s.work_dir = path(x, key);
+        else if (k == "keep_parts") {
+            const std::string b = P.str(x, key);
+            if (b != "true" && b != "false") P.fail(x, key, "expected true or false");
+            s.keep_parts = b == "true";
+        } else if (k == "sbatch_args") {
+            if (!x.IsSequence()) P.fail(x, key, "expected a list of arguments, e.g. [--qos=high, --mem=2G]");
+            s.sbatch_args.clear();
+            for (const auto& a : x) {
+                std::string arg = P.str(a, key);
+                if (arg.empty()) P.fail(a, key, "an empty argument");
+                s.sbatch_args.push_back(std::move(arg));
+            }
+        } else {
+            P.fail(kv.first, key,
+                   "unknown key (partition, chunks, time_limit, retries, cpus_per_task, sbatch_args, poll_interval, "
+                   "omega, work_dir, keep_parts)");
+        }
+    }
+}
+
 const std::set<std::string> kJobKeys{"scene", "output", "priority", "spp", "time", "target_error",
                                      "seed", "integrator", "frames", "matrix"};
 
@@ -119,10 +178,13 @@ BatchManifest parse_manifest(const std::string& path) {
         } else if (k == "defaults") {
             if (!v.IsMap()) P.fail(v, k, "expected a mapping of job keys");
             defaults = v;
+        } else if (k == "slurm") {
+            parse_slurm(P, v, dir, m.slurm);
         } else if (k != "jobs") {
-            P.fail(kv.first, k, "unknown key (host, concurrency, retries, retry_delay, poll_interval, output_dir, defaults, jobs)");
+            P.fail(kv.first, k, "unknown key (host, concurrency, retries, retry_delay, poll_interval, output_dir, defaults, slurm, jobs)");
         }
     }
+    m.output_dir = out_dir.lexically_normal().string();
     const YAML::Node jobs = root["jobs"];
     if (!jobs) P.fail(root, "jobs", "missing");
     if (!jobs.IsSequence() || jobs.size() == 0) P.fail(jobs, "jobs", "expected a non-empty list");
@@ -422,13 +484,20 @@ void add_batch_command(CLI::App& app, BatchArgs& a) {
     add_host_option(cmd, a.host);
     cmd->add_option("-j,--concurrency", a.concurrency, "Jobs in flight at once (overrides the manifest)")
         ->check(CLI::Range(1, 1024));
+    cmd->add_flag("--slurm", a.slurm, "Submit to Slurm: a job array of sample chunks and a merge job per job (the manifest's `slurm:` keys)");
+    cmd->add_flag("--dry-run", a.dry_run, "With --slurm: print the scripts and sbatch commands, submit nothing");
 }
 
 int run_batch(const BatchArgs& a) {
     return guarded([&] {
         BatchManifest m = parse_manifest(a.manifest);
         if (a.concurrency) m.concurrency = *a.concurrency;
-        const auto results = run_batch_jobs(m, a.host, stderr);
+        if (a.dry_run && !a.slurm) throw ClientError(kExitBadInput, "--dry-run needs --slurm");
+        if (a.slurm && a.dry_run) {
+            slurm::run_slurm_batch(m, true, stdout, stderr);
+            return kExitOk;
+        }
+        const auto results = a.slurm ? slurm::run_slurm_batch(m, false, stdout, stderr) : run_batch_jobs(m, a.host, stderr);
         std::fputs(format_summary(results).c_str(), stdout);
         std::fflush(stdout);
         for (const auto& r : results)

@@ -20,14 +20,32 @@ struct BatchEntry {
     std::string where;   // "manifest.yaml:12" of its jobs[] item
 };
 
+// The manifest's `slurm:` mapping: how `omega batch --slurm` splits and submits each job
+// (docs/client.md, "batch --slurm").
+struct SlurmSettings {
+    std::optional<std::string> partition;   // sbatch --partition
+    int chunks = 4;                         // sample chunks (array tasks) per job
+    std::optional<std::string> time_limit;  // sbatch --time, per task
+    std::optional<int> retries;             // resubmissions per chunk and merge; default: the manifest's
+    int cpus_per_task = 1;                  // sbatch --cpus-per-task, and render --threads
+    std::vector<std::string> sbatch_args;   // extra sbatch arguments, one per element
+    double poll_interval_s = 5.0;           // seconds between squeue polls, at least kMinPollInterval
+    std::optional<std::string> omega;       // the omega binary on the nodes; default: this one
+    std::optional<std::string> work_dir;    // scripts, parts, logs; default: output_dir/.omega-slurm
+    bool keep_parts = false;                // keep the partial EXRs after a successful merge
+    static constexpr double kMinPollInterval = 1.0;
+};
+
 struct BatchManifest {
     std::string path;
+    std::string output_dir;  // where relative outputs go (resolved)
     std::optional<std::string> host;
     int concurrency = 2;
     int retries = 2;
     double retry_delay_s = 1.0;
     double poll_interval_s = 0.5;
     std::vector<BatchEntry> jobs;
+    SlurmSettings slurm;  // used by --slurm only
 };
 
 // Throws ClientError (exit 2) with "file:line: key: what" for anything wrong.
@@ -54,6 +72,8 @@ struct BatchArgs {
     std::string manifest;
     std::optional<std::string> host;
     std::optional<int> concurrency;
+    bool slurm = false;    // submit to Slurm instead of omegad
+    bool dry_run = false;  // with --slurm: print the scripts and sbatch commands, submit nothing
 };
 
 void add_batch_command(CLI::App& app, BatchArgs& args);
