@@ -288,8 +288,16 @@ TEST(SceneParser, Errors) {
               "scene.yaml:3: shapes[0].radius: must be > 0, got -1");
     EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  w: {type: diffuse, reflectance: [0.5, 1.2, 0]}\n"),
               "scene.yaml:3: materials.w.reflectance: components must be in [0, 1], got [0.5, 1.2, 0]");
-    EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  w: {type: plastic}\n"),
-              "scene.yaml:3: materials.w.type: expected one of diffuse, conductor, dielectric, black, got 'plastic'");
+    EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  w: {type: velvet}\n"),
+              "scene.yaml:3: materials.w.type: expected one of diffuse, conductor, dielectric, plastic, roughplastic, "
+              "black, got 'velvet'");
+    // Plastic is isotropic (as in Mitsuba and Tungsten), and a smooth plastic has no roughness.
+    EXPECT_NE(parse_error("omega: 1\nmaterials:\n  p: {type: roughplastic, alpha_u: 0.1, alpha_v: 0.2}\n").find("alpha_u"),
+              std::string::npos);
+    EXPECT_NE(parse_error("omega: 1\nmaterials:\n  p: {type: plastic, alpha: 0.1}\n").find("materials.p.alpha"),
+              std::string::npos);
+    EXPECT_NE(parse_error("omega: 1\nmaterials:\n  p: {type: plastic, int_ior: unobtainium}\n").find("materials.p.int_ior"),
+              std::string::npos);
     EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  g: {type: dielectric, int_ior: unobtainium}\n"),
               "scene.yaml:3: materials.g.int_ior: expected a number or a named IOR (vacuum, air, water, bk7, glass, "
               "diamond, ...), got 'unobtainium'");
