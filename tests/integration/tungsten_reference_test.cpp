@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <vector>
 
 #include "film/film.h"
@@ -68,7 +69,10 @@ TEST(TungstenReference, PlasticSpheres) {
     d.sensor.film.crop = {0, 0, w, h};
     ASSERT_EQ(d.sensor.film.filter, FilterType::Box);
     d.integrator.type = IntegratorType::Path;
-    auto r = test::render(d, 1024, 17, 2);
+    // 2048 spp: about 10 s on 2 threads, region noise 0.3-0.6% (OMEGA_TUNGSTEN_SPP overrides, for
+    // sharper figures by hand).
+    const char* spp_env = std::getenv("OMEGA_TUNGSTEN_SPP");
+    auto r = test::render(d, spp_env ? std::atoll(spp_env) : 2048, 17, 2);
     EXPECT_EQ(r.report.nonfinite, 0u);
     EXPECT_EQ(r.report.mis_errors, 0u);
     const Film& f = r.film();
@@ -103,10 +107,13 @@ TEST(TungstenReference, PlasticSpheres) {
     // 5 regions + 64 blocks, family-wise false alarm 1e-3.
     const double bound = test::z_threshold(5 + int(blocks.size()));
     for (int k = 0; k < 5; ++k) {
-        std::printf("[tungsten] plastic-spheres %-28s pixels %4d  Omega/Tungsten %.5f  z %+.2f\n", names[k],
-                    spheres[k].pixels, spheres[k].ratio(), spheres[k].z());
-        EXPECT_LT(std::abs(spheres[k].z()), bound) << names[k];
-        EXPECT_NEAR(spheres[k].ratio(), 1.0, 0.01) << names[k];
+        const Region& g = spheres[k];
+        std::printf("[tungsten] plastic-spheres %-28s pixels %4d  Omega/Tungsten %.5f (sd %.5f)  z %+.2f\n", names[k],
+                    g.pixels, g.ratio(), std::sqrt(g.var + sqr(kRefBlockRelNoise * g.ref)) / g.ref, g.z());
+        EXPECT_LT(std::abs(g.z()), bound) << names[k];
+        // A gross-error guard beside the z-test (a z-test alone passes anything if the variance
+        // estimate blows up).
+        EXPECT_NEAR(g.ratio(), 1.0, 0.03) << names[k];
     }
     double zmax = 0, z2 = 0;
     for (const Region& b : blocks) {
