@@ -414,6 +414,7 @@ TEST(PlasticBsdf, WhiteSmoothPlasticConservesEnergyExactly) {
 TEST(PlasticBsdf, SmoothMirrorLobeIsDiscrete) {
     PlasticBsdf p = plastic(0);
     p.specular_reflectance = {0.9f, 0.6f, 0.3f};
+    const PlasticBsdf plain = plastic(0);
     const float ks = 0.6f;  // mean of specular_reflectance
     for (float c : {1.f, 0.5f, 0.1f, 0.01f, -0.4f}) {
         Vec3 wo = dir(c, 0.9f);
@@ -431,8 +432,8 @@ TEST(PlasticBsdf, SmoothMirrorLobeIsDiscrete) {
                 ASSERT_NEAR(s->pdf_sa, ps, 1e-6f);
                 ASSERT_EQ(s->wi, reflect_local(wo));
                 for (int k = 0; k < 3; ++k) ASSERT_NEAR(s->weight[k], fo * p.specular_reflectance[k] / ps, 1e-5f);
-                // The delta lobe has no density and no finite f.
-                ASSERT_EQ(bsdf_eval(p, wo, s->wi, kRad), bsdf_eval(plastic(0), wo, s->wi, kRad));
+                // The delta lobe has no finite f: eval is the substrate alone, whatever Ks is.
+                ASSERT_EQ(bsdf_eval(p, wo, s->wi, kRad), bsdf_eval(plain, wo, s->wi, kRad));
             } else {
                 ASSERT_EQ(s->lobe, kLobeReflection | kLobeDiffuse);
                 ASSERT_GT(s->wi.z * wo.z, 0.f);
@@ -459,12 +460,12 @@ TEST(PlasticBsdf, RoughPlasticEnergyBounded) {
     for (MicrofacetType t : {MicrofacetType::GGX, MicrofacetType::Beckmann})
         for (float a : {0.05f, 0.2f, 0.5f, 1.f})
             for (float c : {1.f, 0.5f, 0.1f, 0.01f}) {
-                Albedo w = albedo_by_sampling(plastic(a, t, true, {1, 1, 1}), dir(c, 0.2f), kImp, 40000, 91);
+                Albedo w = albedo_by_sampling(plastic(a, t, true, {1, 1, 1}), dir(c, 0.2f), kImp, 20000, 91);
                 EXPECT_LE(w.mean.x, 1.001f + 4 * w.std_err.x) << a << " cos " << c;
                 if (c >= 0.5f) {
                     EXPECT_GT(w.mean.x, 0.93f) << a << " cos " << c;
                 }
-                Albedo k = albedo_by_sampling(plastic(a, t, true, {0, 0, 0}), dir(c, 0.2f), kImp, 40000, 92);
+                Albedo k = albedo_by_sampling(plastic(a, t, true, {0, 0, 0}), dir(c, 0.2f), kImp, 20000, 92);
                 EXPECT_LE(k.mean.x, fresnel_dielectric(c, 1.5f).r + 0.1f) << a << " cos " << c;
                 EXPECT_GE(k.mean.x, 0.f);
             }
