@@ -446,6 +446,16 @@ TEST(PlasticBsdf, SmoothMirrorLobeIsDiscrete) {
         }
         double sd = std::sqrt(n * ps * (1 - ps)) + 0.5;
         EXPECT_NEAR(n_mirror, n * ps, 5 * sd) << "cos " << c;
+        // Importance transport (light tracing, bdpt's light subpaths) makes the same choices with
+        // the same weights: the coat has no refraction of its own to scale.
+        for (float uc : {0.f, 0.5f * ps, 0.999f * ps, ps + 0.01f, 0.7f}) {
+            auto r = bsdf_sample(p, wo, uc, {0.3f, 0.8f}, kRad), i = bsdf_sample(p, wo, uc, {0.3f, 0.8f}, kImp);
+            ASSERT_TRUE(r && i);
+            EXPECT_EQ(r->wi, i->wi);
+            EXPECT_EQ(r->weight, i->weight);
+            EXPECT_EQ(r->pdf_sa, i->pdf_sa);
+            EXPECT_EQ(r->lobe, i->lobe);
+        }
         // Exactly at the mirror direction eval and pdf hold the substrate only (no delta).
         Vec3 mirror = reflect_local(wo);
         EXPECT_NEAR(bsdf_pdf_sa(p, wo, mirror, kRad), (1 - ps) * std::abs(c) * kInvPi, 1e-6f);
