@@ -256,6 +256,13 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         full_path->clear();
         for (int i = 0; i < s; ++i) full_path->push_back((i == 0 && sampled_light) ? *sampled_light : light[size_t(i)]);
         for (int j = t - 1; j >= 0; --j) full_path->push_back((j == 0 && sampled_sensor) ? *sampled_sensor : camera[size_t(j)]);
+        // This path scatters at the connection through eval(), not through the lobe the subpaths'
+        // walks took next (see full_path_pdfs_into).
+        for (int i : {s - 1, s})
+            if (s >= 1 && t >= 1 && i >= 0 && i < s + t) {
+                PathVertex& v = (*full_path)[size_t(i)];
+                if (v.kind == VertexKind::Surface && v.bsdf && bsdf_has_nondelta(*v.bsdf)) v.delta = false;
+            }
     }
     if (pdfs) *pdfs = fp;
     return c;
