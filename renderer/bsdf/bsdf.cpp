@@ -35,12 +35,20 @@ std::optional<BsdfSample> bsdf_sample(const Bsdf& b, const Vec3& wo, float uc, V
             using T = std::decay_t<decltype(m)>;
             if constexpr (std::is_same_v<T, BlackBsdf>) return std::nullopt;
             else if constexpr (std::is_same_v<T, DielectricBsdf>) return sample(m, wo, uc, u, mode);
+            else if constexpr (std::is_same_v<T, PlasticBsdf>) return sample(m, wo, uc, u);
             else return sample(m, wo, u);
         },
         b);
 }
 
 const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
+    if (const auto* p = std::get_if<PlasticBsdf>(&b)) {
+        PlasticBsdf q = *p;
+        q.diffuse_reflectance = q.diffuse_reflectance_tex->eval(uv);
+        q.diffuse_reflectance_tex = nullptr;
+        tmp = q;
+        return tmp;
+    }
     DiffuseBsdf d = std::get<DiffuseBsdf>(b);
     d.reflectance = d.reflectance_tex->eval(uv);
     d.reflectance_tex = nullptr;
@@ -56,6 +64,10 @@ uint8_t bsdf_lobes(const Bsdf& b) {
                 return kLobeNone;
             } else if constexpr (std::is_same_v<T, DiffuseBsdf>) {
                 return kLobeReflection | kLobeDiffuse;
+            } else if constexpr (std::is_same_v<T, PlasticBsdf>) {
+                // The coat's reflection and the substrate are separate lobes; a path through the
+                // smooth coat's mirror lobe is S, one through the substrate or a rough coat is D.
+                return kLobeReflection | kLobeDiffuse | (m.alpha == 0 ? kLobeDelta : kLobeGlossy);
             } else if constexpr (std::is_same_v<T, ConductorBsdf>) {
                 bool smooth = m.alpha_u == 0 && m.alpha_v == 0;
                 return kLobeReflection | (smooth ? kLobeDelta : kLobeGlossy);

@@ -73,10 +73,35 @@ struct DielectricBsdf {
     MicrofacetType distribution = MicrofacetType::GGX;
 };
 
+// Plastic: a smooth dielectric coat over a Lambertian base (Tungsten's plastic / rough_plastic,
+// Mitsuba's plastic / roughplastic; see plastic.cpp for the model and where it comes from).
+// alpha == 0 is the smooth coat (a delta reflection plus the diffuse substrate); alpha > 0 makes
+// the coat's reflection a glossy microfacet lobe (isotropic, as in both reference renderers).
+struct PlasticBsdf {
+    // int_ior / ext_ior. Set it through set_eta(), which keeps fdr_int in step.
+    float eta = 1.5f;
+    // Hemispherical average internal reflectance of the coat, 2 ∫ F_int(mu) mu dmu, by quadrature
+    // in set_eta() (once per material: the BSDF is evaluated millions of times, eta never
+    // changes). The default belongs to eta = 1.5 (a test keeps it in step with plastic_fdr_int).
+    float fdr_int = 0.59634576f;
+    Rgb diffuse_reflectance{0.5f, 0.5f, 0.5f};
+    Rgb specular_reflectance{1.f, 1.f, 1.f};
+    // true: rho / (1 - rho fdr_int) (Tungsten; Mitsuba's nonlinear); false: rho / (1 - fdr_int)
+    // (Mitsuba's default), which keeps the diffuse colour as given instead of saturating it.
+    bool nonlinear = false;
+    float alpha = 0;
+    MicrofacetType distribution = MicrofacetType::Beckmann;
+    bool two_sided = true;
+    // As DiffuseBsdf::reflectance_tex, for diffuse_reflectance (which then holds the mean).
+    const BitmapTexture* diffuse_reflectance_tex = nullptr;
+
+    void set_eta(float e);
+};
+
 // Absorbs everything; used for emitters that should not reflect.
 struct BlackBsdf {};
 
-using Bsdf = std::variant<DiffuseBsdf, ConductorBsdf, DielectricBsdf, BlackBsdf>;
+using Bsdf = std::variant<DiffuseBsdf, ConductorBsdf, DielectricBsdf, PlasticBsdf, BlackBsdf>;
 
 Rgb bsdf_eval(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
 float bsdf_pdf_sa(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
@@ -95,9 +120,17 @@ inline bool bsdf_has_nondelta(const Bsdf& b) { return bsdf_lobes(b) & (kLobeDiff
 // Every evaluation of a scene BSDF at a hit goes through this (path tracer, subpath walks,
 // connections), so all integrators see the same textured albedo.
 const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp);
-inline const Bsdf& resolve_bsdf(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
-    const auto* d = std::get_if<DiffuseBsdf>(&b);
-    return d && d->reflectance_tex ? resolve_textured(b, uv, tmp) : b;
+inline bool bsdf_is_textured(const Bsdf& b) {
+    if (const auto* d = std::get_if<DiffuseBsdf>(&b)) return d->reflectance_tex != nullptr;
+    if (const auto* p = std::get_if<PlasticBsdf>(&b)) return p->diffuse_reflectance_tex != nullptr;
+    return false;
 }
+inline const Bsdf& resolve_bsdf(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
+    return bsdf_is_textured(b) ? resolve_textured(b, uv, tmp) : b;
+}
+
+// Hemispherical average of the dielectric Fresnel reflectance seen from inside a medium of
+// relative index eta (int_ior / ext_ior): 2 ∫_0^1 F_int(mu) mu dmu, by quadrature in double.
+float plastic_fdr_int(float eta);
 
 }  // namespace omega

@@ -16,4 +16,10 @@ Rgb eval(const DielectricBsdf& b, const Vec3& wo, const Vec3& wi, TransportMode 
 float pdf_sa(const DielectricBsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
 std::optional<BsdfSample> sample(const DielectricBsdf& b, const Vec3& wo, float uc, Vec2 u, TransportMode mode);
 
+// Plastic is reciprocal (f(wo, wi) = f(wi, wo)) and has no refraction of its own, so the
+// importance BSDF equals the radiance one and no TransportMode is needed.
+Rgb eval(const PlasticBsdf& b, const Vec3& wo, const Vec3& wi);
+float pdf_sa(const PlasticBsdf& b, const Vec3& wo, const Vec3& wi);
+std::optional<BsdfSample> sample(const PlasticBsdf& b, const Vec3& wo, float uc, Vec2 u);
+
 }  // namespace omega

@@ -74,8 +74,21 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
     // Densities across the connecting edge v_{s-1} -- v_s and one step beyond, which neither
     // subpath could know when it was generated.
     if (s >= 1 && t >= 1) {
-        const PathVertex& a = V(s - 1);  // light side
-        const PathVertex& b = V(s);      // sensor side
+        const PathVertex& a_walk = V(s - 1);  // light side
+        const PathVertex& b_walk = V(s);      // sensor side
+        // The connection scatters at a and b through eval(), i.e. their non-delta lobes, whatever
+        // lobe their own walks sampled next: a BSDF that mixes a delta lobe with others (smooth
+        // plastic: mirror + substrate) may have recorded delta for the continuation that this
+        // path does not take. pbrt-v3's MISWeight resets the same flags. Left as recorded for a
+        // delta-only BSDF: eval() is 0 there, and every split keeps the same table.
+        auto as_connected = [](const PathVertex& v) {
+            PathVertex c = v;
+            if (c.delta && c.kind == VertexKind::Surface && c.bsdf && bsdf_has_nondelta(*c.bsdf)) c.delta = false;
+            return c;
+        };
+        const PathVertex a = as_connected(a_walk), b = as_connected(b_walk);
+        if (s - 1 > 0) fp.delta[size_t(s - 1)] = a.delta ? 1 : 0;
+        if (s < n - 1) fp.delta[size_t(s)] = b.delta ? 1 : 0;
         // A density taken through a delta vertex is the discrete 1, as the walks record it. Only
         // impossible strategies connect there, but every split must yield the same table.
         // p_sensor[s-1]: b generating a.
@@ -243,6 +256,13 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         full_path->clear();
         for (int i = 0; i < s; ++i) full_path->push_back((i == 0 && sampled_light) ? *sampled_light : light[size_t(i)]);
         for (int j = t - 1; j >= 0; --j) full_path->push_back((j == 0 && sampled_sensor) ? *sampled_sensor : camera[size_t(j)]);
+        // This path scatters at the connection through eval(), not through the lobe the subpaths'
+        // walks took next (see full_path_pdfs_into).
+        for (int i : {s - 1, s})
+            if (s >= 1 && t >= 1 && i >= 0 && i < s + t) {
+                PathVertex& v = (*full_path)[size_t(i)];
+                if (v.kind == VertexKind::Surface && v.bsdf && bsdf_has_nondelta(*v.bsdf)) v.delta = false;
+            }
     }
     if (pdfs) *pdfs = fp;
     return c;

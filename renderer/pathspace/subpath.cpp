@@ -198,7 +198,8 @@ Rgb vertex_f(const PathVertex& v, const Vec3& wi, TransportMode mode) {
 }
 
 double vertex_pdf_sa(const PathVertex& v, const Vec3& from, const Vec3& to) {
-    // No resolve_bsdf: only a diffuse reflectance can be textured, and no density depends on it.
+    // No resolve_bsdf: only a diffuse reflectance (of diffuse or plastic) can be textured, and no
+    // density depends on it (plastic's lobe selection ignores it on purpose).
     return bsdf_pdf_sa(*v.bsdf, v.shading.to_local(from), v.shading.to_local(to), TransportMode::Radiance);
 }
 

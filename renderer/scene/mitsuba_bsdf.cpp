@@ -230,14 +230,20 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         put_colour("specular_transmittance", "specular_transmittance");
         if (type == "roughdielectric") put_alpha("0.1");
     } else if (type == "plastic" || type == "roughplastic") {
-        y["type"] = "diffuse";
-        put_colour("reflectance", "diffuse_reflectance", true);
+        // Mitsuba 3 and 0.6 share the model and the defaults (polypropylene in air, nonlinear
+        // false, diffuse 0.5, specular 1; roughplastic: Beckmann, alpha 0.1); written out
+        // explicitly so that Omega's own defaults never leak into an imported scene.
+        y["type"] = type;
+        put_colour("diffuse_reflectance", "diffuse_reflectance", true);
+        if (!lines.count("diffuse_reflectance")) y["diffuse_reflectance"] = "0.5";
+        put_colour("specular_reflectance", "specular_reflectance");
+        put("int_ior", "int_ior");
+        if (!lines.count("int_ior")) y["int_ior"] = "polypropylene";
+        put("ext_ior", "ext_ior");
+        if (!lines.count("ext_ior")) y["ext_ior"] = "air";
+        put("nonlinear", "nonlinear");
+        if (type == "roughplastic") put_alpha("0.1");
         y["two_sided"] = two_sided;
-        for (const char* p : {"specular_reflectance", "int_ior", "ext_ior", "nonlinear", "alpha", "distribution", "sample_visible"})
-            (void)find_param(e, p);
-        warn(n, key,
-             type + " is approximated by a diffuse BSDF with its diffuse_reflectance: the specular coating "
-                    "(highlights and Fresnel darkening) is dropped");
     } else if (type == "null") {
         y["type"] = "black";
         warn(n, key, "the null BSDF (an invisible surface) is not supported; the surface is black instead");

@@ -401,6 +401,62 @@ TEST(MitsubaImporter, MaterialsMapToOmegaBsdfs) {
     expect_round_trip(d);
 }
 
+// Both syntaxes, Mitsuba's defaults written out (Omega's own differ: ggx), parameters by name.
+TEST(MitsubaImporter, PlasticMapsToTheCoatedBsdf) {
+    SceneDesc d = import(R"(
+<bsdf type="plastic" id="def"/>
+<bsdf type="twosided" id="red"><bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.8, 0.1, 0.1"/>
+  <float name="int_ior" value="1.5"/><float name="ext_ior" value="1"/><boolean name="nonlinear" value="true"/>
+  <rgb name="specular_reflectance" value="0.5"/></bsdf></bsdf>
+<bsdf type="roughplastic" id="rdef"/>
+<bsdf type="roughplastic" id="ggx"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/>
+  <string name="int_ior" value="bk7"/><string name="ext_ior" value="water"/></bsdf>
+<shape type="cube"><ref id="def"/></shape>
+<shape type="cube"><ref id="red"/></shape>
+<shape type="cube"><ref id="rdef"/></shape>
+<shape type="cube"><ref id="ggx"/></shape>
+)" + std::string(kLitBox));
+    const auto& def = std::get<PlasticBsdf>(d.materials.at("def").bsdf);
+    EXPECT_FLOAT_EQ(def.eta, 1.49f / 1.000277f);  // polypropylene in air
+    EXPECT_NEAR(def.fdr_int, plastic_fdr_int(1.49f / 1.000277f), 1e-7f);
+    expect_rgb(def.diffuse_reflectance, 0.5f, 0.5f, 0.5f);
+    expect_rgb(def.specular_reflectance, 1.f, 1.f, 1.f);
+    EXPECT_FALSE(def.nonlinear);
+    EXPECT_EQ(def.alpha, 0.f);
+    EXPECT_FALSE(def.two_sided);
+    const auto& red = std::get<PlasticBsdf>(d.materials.at("red").bsdf);
+    EXPECT_FLOAT_EQ(red.eta, 1.5f);
+    expect_rgb(red.diffuse_reflectance, 0.8f, 0.1f, 0.1f);
+    expect_rgb(red.specular_reflectance, 0.5f, 0.5f, 0.5f);
+    EXPECT_TRUE(red.nonlinear);
+    EXPECT_TRUE(red.two_sided);
+    const auto& rdef = std::get<PlasticBsdf>(d.materials.at("rdef").bsdf);
+    EXPECT_FLOAT_EQ(rdef.alpha, 0.1f);
+    EXPECT_EQ(rdef.distribution, MicrofacetType::Beckmann);
+    const auto& ggx = std::get<PlasticBsdf>(d.materials.at("ggx").bsdf);
+    EXPECT_FLOAT_EQ(ggx.alpha, 0.2f);
+    EXPECT_EQ(ggx.distribution, MicrofacetType::GGX);
+    EXPECT_FLOAT_EQ(ggx.eta, 1.5046f / 1.333f);
+    ASSERT_EQ(d.warnings.size(), 1u) << all_warnings(d);  // only the missing sensor
+    expect_round_trip(d);
+
+    // Mitsuba 0.6: camelCase names.
+    SceneDesc old = import_mitsuba_string(R"(<scene version="0.6.0">
+<bsdf type="roughplastic" id="p"><rgb name="diffuseReflectance" value="0.2, 0.3, 0.4"/>
+  <float name="intIOR" value="1.6"/><float name="extIOR" value="1.1"/><rgb name="specularReflectance" value="0.7"/>
+  <boolean name="nonlinear" value="true"/><float name="alpha" value="0.3"/></bsdf>
+<shape type="cube"><ref id="p"/></shape>
+)" + std::string(kLitBox) + "</scene>\n", "scene.xml");
+    const auto& p = std::get<PlasticBsdf>(old.materials.at("p").bsdf);
+    expect_rgb(p.diffuse_reflectance, 0.2f, 0.3f, 0.4f);
+    expect_rgb(p.specular_reflectance, 0.7f, 0.7f, 0.7f);
+    EXPECT_FLOAT_EQ(p.eta, 1.6f / 1.1f);
+    EXPECT_TRUE(p.nonlinear);
+    EXPECT_FLOAT_EQ(p.alpha, 0.3f);
+    EXPECT_EQ(p.distribution, MicrofacetType::Beckmann);
+    EXPECT_EQ(old.warnings.size(), 2u) << all_warnings(old);  // the 0.6 note and the missing sensor
+}
+
 TEST(MitsubaImporter, ValueErrorsNameTheParameterLine) {
     EXPECT_EQ(import_error("<bsdf type=\"roughconductor\" id=\"x\">\n\n<float name=\"alpha\" value=\"2\"/></bsdf>\n"
                            "<shape type=\"cube\"><ref id=\"x\"/></shape>"),
@@ -574,8 +630,6 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
         "sensor.film.rfilter: reconstruction filter 'mitchell' is not supported",
         "medium: <medium type=\"homogeneous\"> is not supported and was ignored",
         "include: <include> is not supported and was ignored",
-        "bsdf(p): plastic is approximated by a diffuse BSDF",
-        "bsdf(rp): roughplastic is approximated by a diffuse BSDF",
         "bsdf(thin): thindielectric is approximated by a dielectric",
         "bsdf(n): the null BSDF",
         "bsdf(h): BSDF 'hair' is not supported; using a grey diffuse",
@@ -592,7 +646,9 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
     for (const char* w : expected) EXPECT_TRUE(has_warning(d, w)) << w << "\nin:\n" << all_warnings(d);
     EXPECT_EQ(d.warnings.size(), std::size(expected)) << all_warnings(d);
     // The approximations themselves.
-    expect_rgb(std::get<DiffuseBsdf>(d.materials.at("p").bsdf).reflectance, 0.2f, 0.2f, 0.2f);
+    // Plastic is supported now: no warning, and the coat is kept.
+    expect_rgb(std::get<PlasticBsdf>(d.materials.at("p").bsdf).diffuse_reflectance, 0.2f, 0.2f, 0.2f);
+    EXPECT_GT(std::get<PlasticBsdf>(d.materials.at("rp").bsdf).alpha, 0.f);
     EXPECT_TRUE(std::holds_alternative<DielectricBsdf>(d.materials.at("thin").bsdf));
     EXPECT_TRUE(std::holds_alternative<BlackBsdf>(d.materials.at("n").bsdf));
     EXPECT_EQ(d.integrator.type, IntegratorType::Path);

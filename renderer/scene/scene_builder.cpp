@@ -81,18 +81,23 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
         uint32_t idx = uint32_t(s->materials_.size());
         Bsdf b = m->second.bsdf;
         if (const auto& bd = m->second.reflectance_texture) {
-            auto* d = std::get_if<DiffuseBsdf>(&b);
-            if (!d) throw SceneError(fmt::format("{}: {}: only a diffuse reflectance can be a bitmap", where(bd->loc), bd->loc.key));
-            d->reflectance_tex = texture_for(*bd);
-            d->reflectance = d->reflectance_tex->mean();
+            if (auto* d = std::get_if<DiffuseBsdf>(&b)) {
+                d->reflectance_tex = texture_for(*bd);
+                d->reflectance = d->reflectance_tex->mean();
+            } else if (auto* p = std::get_if<PlasticBsdf>(&b)) {
+                p->diffuse_reflectance_tex = texture_for(*bd);
+                p->diffuse_reflectance = p->diffuse_reflectance_tex->mean();
+            } else {
+                throw SceneError(fmt::format("{}: {}: only a diffuse or plastic reflectance can be a bitmap", where(bd->loc),
+                                             bd->loc.key));
+            }
         }
         s->materials_.push_back(b);
         material_index.emplace(sd.material, idx);
         return idx;
     };
     auto textured = [&](uint32_t material) {
-        const auto* d = std::get_if<DiffuseBsdf>(&s->materials_[material]);
-        return d && d->reflectance_tex;
+        return bsdf_is_textured(s->materials_[material]);
     };
 
     s->shapes_.reserve(desc.shapes.size());

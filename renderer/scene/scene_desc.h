@@ -102,7 +102,7 @@ struct MaterialDesc {
     std::string name;
     Bsdf bsdf;
     SourceLoc loc;
-    // Diffuse only: the reflectance is this bitmap (the bsdf's own reflectance is then unused).
+    // Diffuse and plastic: the (diffuse) reflectance is this bitmap (the bsdf's own value is then unused).
     // Last, so that {name, bsdf, loc} still initialises an untextured material.
     std::optional<BitmapDesc> reflectance_texture;
 };

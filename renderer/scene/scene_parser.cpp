@@ -144,7 +144,7 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Materials
 
-enum class MatType { Diffuse, Conductor, Dielectric, Black };
+enum class MatType { Diffuse, Conductor, Dielectric, Plastic, RoughPlastic, Black };
 
 void parse_alpha(ParamBag& b, float& au, float& av) {
     bool iso = b.has("alpha"), aniso = b.has("alpha_u") || b.has("alpha_v");
@@ -300,6 +300,8 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
     MatType type = ParamBag::enum_value<MatType>(b.require("type"), {{"diffuse", MatType::Diffuse},
                                                                      {"conductor", MatType::Conductor},
                                                                      {"dielectric", MatType::Dielectric},
+                                                                     {"plastic", MatType::Plastic},
+                                                                     {"roughplastic", MatType::RoughPlastic},
                                                                      {"black", MatType::Black}});
     switch (type) {
         case MatType::Diffuse: {
@@ -351,6 +353,29 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
             parse_alpha(b, d.alpha_u, d.alpha_v);
             d.distribution = parse_distribution(b);
             m.bsdf = d;
+            break;
+        }
+        case MatType::Plastic:
+        case MatType::RoughPlastic: {
+            PlasticBsdf p;
+            if (b.has("diffuse_reflectance") && b.get("diffuse_reflectance")->is_map())
+                m.reflectance_texture = parse_bitmap(*b.get("diffuse_reflectance"));
+            else
+                p.diffuse_reflectance = rgb_in(b, "diffuse_reflectance", p.diffuse_reflectance, 0, 1);
+            p.specular_reflectance = rgb_in(b, "specular_reflectance", p.specular_reflectance, 0, 1);
+            // Mitsuba's defaults: polypropylene in air.
+            float int_ior = parse_ior(b, "int_ior", 1.49f);
+            float ext_ior = parse_ior(b, "ext_ior", 1.000277f);
+            p.set_eta(int_ior / ext_ior);
+            p.nonlinear = b.get_bool("nonlinear", false);
+            if (type == MatType::RoughPlastic) {
+                // Isotropic only, as Mitsuba's roughplastic and Tungsten's rough_plastic (alpha_u/v
+                // are reported as unknown keys). alpha 0 is the smooth coat, as for conductors.
+                p.alpha = float_in(b, "alpha", 0.1f, 0, false, 1, false);
+                p.distribution = parse_distribution(b);
+            }
+            p.two_sided = b.get_bool("two_sided", true);
+            m.bsdf = p;
             break;
         }
         case MatType::Black: m.bsdf = BlackBsdf{}; break;

@@ -229,6 +229,36 @@ TEST(SceneParser, Defaults) {
     EXPECT_TRUE(d.warnings.empty());
 }
 
+TEST(SceneParser, PlasticDefaultsAndNamedIors) {
+    SceneDesc d = parse_scene_string(R"(omega: 1
+lights: [{type: constant, radiance: 1}]
+materials:
+  p: {type: plastic}
+  r: {type: roughplastic, int_ior: bk7, ext_ior: water, diffuse_reflectance: [0.1, 0.2, 0.3],
+      specular_reflectance: 0.5, nonlinear: true, distribution: beckmann, two_sided: false}
+  s: {type: roughplastic}
+)", "scene.yaml");
+    const auto& p = std::get<PlasticBsdf>(d.materials.at("p").bsdf);
+    EXPECT_FLOAT_EQ(p.eta, 1.49f / 1.000277f);  // Mitsuba's polypropylene in air
+    EXPECT_EQ(p.fdr_int, plastic_fdr_int(p.eta));
+    EXPECT_EQ(p.diffuse_reflectance, Rgb(0.5f));
+    EXPECT_EQ(p.specular_reflectance, Rgb(1.f));
+    EXPECT_FALSE(p.nonlinear);
+    EXPECT_EQ(p.alpha, 0.f);
+    EXPECT_TRUE(p.two_sided);
+    const auto& r = std::get<PlasticBsdf>(d.materials.at("r").bsdf);
+    EXPECT_FLOAT_EQ(r.eta, 1.5046f / 1.333f);
+    EXPECT_EQ(r.fdr_int, plastic_fdr_int(r.eta));
+    EXPECT_EQ(r.diffuse_reflectance, (Rgb{0.1f, 0.2f, 0.3f}));
+    EXPECT_EQ(r.specular_reflectance, Rgb(0.5f));
+    EXPECT_TRUE(r.nonlinear);
+    EXPECT_EQ(r.distribution, MicrofacetType::Beckmann);
+    EXPECT_FALSE(r.two_sided);
+    const auto& s = std::get<PlasticBsdf>(d.materials.at("s").bsdf);
+    EXPECT_FLOAT_EQ(s.alpha, 0.1f);
+    EXPECT_EQ(s.distribution, MicrofacetType::GGX);  // Omega's format default, as for conductors
+}
+
 TEST(SceneParser, ToWorldOrder) {
     // The first operation applies to the points first: translate-then-rotate moves (1,0,0) to
     // (2,0,0) and then turns it to (0,2,0); rotate-then-translate gives (1,1,0).
@@ -288,8 +318,16 @@ TEST(SceneParser, Errors) {
               "scene.yaml:3: shapes[0].radius: must be > 0, got -1");
     EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  w: {type: diffuse, reflectance: [0.5, 1.2, 0]}\n"),
               "scene.yaml:3: materials.w.reflectance: components must be in [0, 1], got [0.5, 1.2, 0]");
-    EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  w: {type: plastic}\n"),
-              "scene.yaml:3: materials.w.type: expected one of diffuse, conductor, dielectric, black, got 'plastic'");
+    EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  w: {type: velvet}\n"),
+              "scene.yaml:3: materials.w.type: expected one of diffuse, conductor, dielectric, plastic, roughplastic, "
+              "black, got 'velvet'");
+    // Plastic is isotropic (as in Mitsuba and Tungsten), and a smooth plastic has no roughness.
+    EXPECT_NE(parse_error("omega: 1\nmaterials:\n  p: {type: roughplastic, alpha_u: 0.1, alpha_v: 0.2}\n").find("alpha_u"),
+              std::string::npos);
+    EXPECT_NE(parse_error("omega: 1\nmaterials:\n  p: {type: plastic, alpha: 0.1}\n").find("materials.p.alpha"),
+              std::string::npos);
+    EXPECT_NE(parse_error("omega: 1\nmaterials:\n  p: {type: plastic, int_ior: unobtainium}\n").find("materials.p.int_ior"),
+              std::string::npos);
     EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  g: {type: dielectric, int_ior: unobtainium}\n"),
               "scene.yaml:3: materials.g.int_ior: expected a number or a named IOR (vacuum, air, water, bk7, glass, "
               "diamond, ...), got 'unobtainium'");

@@ -92,6 +92,16 @@ std::string material(const MaterialDesc& m, const std::string& base_dir) {
             num(d->eta), rgb(d->specular_reflectance), rgb(d->specular_transmittance), alpha(d->alpha_u, d->alpha_v),
             dist(d->distribution));
     }
+    if (auto* p = std::get_if<PlasticBsdf>(&b)) {
+        // int_ior / ext_ior reproduces eta exactly with ext_ior 1 (and with it fdr_int).
+        std::string s = fmt::format("{{type: {}, diffuse_reflectance: {}, specular_reflectance: {}, int_ior: {}, ext_ior: 1, "
+                                    "nonlinear: {}",
+                                    p->alpha == 0 ? "plastic" : "roughplastic",
+                                    m.reflectance_texture ? bitmap(*m.reflectance_texture, base_dir) : rgb(p->diffuse_reflectance),
+                                    rgb(p->specular_reflectance), num(p->eta), p->nonlinear);
+        if (p->alpha != 0) s += fmt::format(", alpha: {}, distribution: {}", num(p->alpha), dist(p->distribution));
+        return s + fmt::format(", two_sided: {}}}", p->two_sided);
+    }
     return "{type: black}";
 }
 

@@ -115,6 +115,38 @@ shapes:
     EXPECT_FLOAT_EQ(mean.z, 0.5f);
 }
 
+// A plastic's diffuse_reflectance may be a bitmap too; resolve_bsdf looks it up per hit and
+// leaves the coat's parameters (eta, fdr_int, roughness) alone.
+TEST(TextureScene, PlasticDiffuseReflectanceIsTextured) {
+    Fixture f;
+    SceneDesc d = f.parse(R"(materials:
+  p: {type: roughplastic, alpha: 0.2, int_ior: 1.5, ext_ior: 1, nonlinear: true,
+      diffuse_reflectance: {type: bitmap, file: textures/wood.png, filter: nearest, raw: true}}
+shapes:
+  - {type: rectangle, material: p}
+)");
+    ASSERT_TRUE(d.materials.at("p").reflectance_texture);
+    auto scene = Scene::build(d);
+    const Bsdf& b = scene->materials()[scene->shapes()[0].material];
+    const auto& p = std::get<PlasticBsdf>(b);
+    ASSERT_TRUE(p.diffuse_reflectance_tex);
+    EXPECT_TRUE(bsdf_is_textured(b));
+    Bsdf tmp;
+    // Texel 0 (u < 1/2) is red, texel 1 blue (raw 8-bit: 255 -> 1).
+    const auto& left = std::get<PlasticBsdf>(resolve_bsdf(b, {0.25f, 0.5f}, tmp));
+    EXPECT_EQ(left.diffuse_reflectance, (Rgb{1, 0, 0}));
+    EXPECT_EQ(left.diffuse_reflectance_tex, nullptr);
+    EXPECT_EQ(left.fdr_int, p.fdr_int);
+    EXPECT_EQ(left.alpha, 0.2f);
+    EXPECT_TRUE(left.nonlinear);
+    const auto& right = std::get<PlasticBsdf>(resolve_bsdf(b, {0.75f, 0.5f}, tmp));
+    EXPECT_EQ(right.diffuse_reflectance, (Rgb{0, 0, 1}));
+    // The writer keeps the bitmap.
+    SceneDesc back = parse_scene_string(write_scene_yaml(d, ""), (f.dir.path / "back.yaml").string());
+    ASSERT_TRUE(back.materials.at("p").reflectance_texture);
+    EXPECT_TRUE(std::holds_alternative<PlasticBsdf>(back.materials.at("p").bsdf));
+}
+
 TEST(TextureScene, WriterRoundTripsTextures) {
     Fixture f;
     SceneDesc d = f.parse(R"(materials:
