@@ -74,38 +74,39 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
     // Densities across the connecting edge v_{s-1} -- v_s and one step beyond, which neither
     // subpath could know when it was generated.
     if (s >= 1 && t >= 1) {
-        const PathVertex& a_walk = V(s - 1);  // light side
-        const PathVertex& b_walk = V(s);      // sensor side
+        const PathVertex& a = V(s - 1);  // light side
+        const PathVertex& b = V(s);      // sensor side
         // The connection scatters at a and b through eval(), i.e. their non-delta lobes, whatever
         // lobe their own walks sampled next: a BSDF that mixes a delta lobe with others (smooth
         // plastic: mirror + substrate) may have recorded delta for the continuation that this
         // path does not take. pbrt-v3's MISWeight resets the same flags. Left as recorded for a
-        // delta-only BSDF: eval() is 0 there, and every split keeps the same table.
-        auto as_connected = [](const PathVertex& v) {
-            PathVertex c = v;
-            if (c.delta && c.kind == VertexKind::Surface && c.bsdf && bsdf_has_nondelta(*c.bsdf)) c.delta = false;
-            return c;
+        // delta-only BSDF: eval() is 0 there, and every split keeps the same table. Flags, not
+        // vertex copies: this runs for every connection.
+        auto connected_delta = [](const PathVertex& v) {
+            return v.delta && !(v.kind == VertexKind::Surface && v.bsdf && bsdf_has_nondelta(*v.bsdf));
         };
-        const PathVertex a = as_connected(a_walk), b = as_connected(b_walk);
-        if (s - 1 > 0) fp.delta[size_t(s - 1)] = a.delta ? 1 : 0;
-        if (s < n - 1) fp.delta[size_t(s)] = b.delta ? 1 : 0;
+        const bool a_delta = connected_delta(a), b_delta = connected_delta(b);
+        auto through_a = [&](double pdf_area) { return a_delta ? 1.0 : pdf_area; };
+        auto through_b = [&](double pdf_area) { return b_delta ? 1.0 : pdf_area; };
+        if (s - 1 > 0) fp.delta[size_t(s - 1)] = a_delta ? 1 : 0;
+        if (s < n - 1) fp.delta[size_t(s)] = b_delta ? 1 : 0;
         // A density taken through a delta vertex is the discrete 1, as the walks record it. Only
         // impossible strategies connect there, but every split must yield the same table.
         // p_sensor[s-1]: b generating a.
         if (t == 1) fp.p_sensor[size_t(s - 1)] = sensor_density_at(scene, b, a);
-        else fp.p_sensor[size_t(s - 1)] = through(b, to_area_density(b, vertex_pdf_sa(b, b.wo, direction(b, a)), a));
+        else fp.p_sensor[size_t(s - 1)] = through_b(to_area_density(b, vertex_pdf_sa(b, b.wo, direction(b, a)), a));
         // p_sensor[s-2]: a generating its predecessor, having arrived from b.
         if (s >= 2) {
             const PathVertex& a2 = V(s - 2);
-            fp.p_sensor[size_t(s - 2)] = through(a, to_area_density(a, vertex_pdf_sa(a, direction(a, b), direction(a, a2)), a2));
+            fp.p_sensor[size_t(s - 2)] = through_a(to_area_density(a, vertex_pdf_sa(a, direction(a, b), direction(a, a2)), a2));
         }
         // p_light[s]: a generating b.
         if (s == 1) fp.p_light[1] = emission_density_at(scene, a, b);
-        else fp.p_light[size_t(s)] = through(a, to_area_density(a, vertex_pdf_sa(a, a.wo, direction(a, b)), b));
+        else fp.p_light[size_t(s)] = through_a(to_area_density(a, vertex_pdf_sa(a, a.wo, direction(a, b)), b));
         // p_light[s+1]: b generating its successor towards the sensor, having arrived from a.
         if (t >= 2) {
             const PathVertex& b2 = V(s + 1);
-            fp.p_light[size_t(s + 1)] = through(b, to_area_density(b, vertex_pdf_sa(b, direction(b, a), direction(b, b2)), b2));
+            fp.p_light[size_t(s + 1)] = through_b(to_area_density(b, vertex_pdf_sa(b, direction(b, a), direction(b, b2)), b2));
         }
     } else if (t == 0 && n >= 2) {
         // The light subpath hit the lens b = v_k: the sensor side's densities at the end of the
