@@ -6,6 +6,7 @@
 #include <set>
 
 #include "batch_command.h"
+#include "batch_test_util.h"
 #include "test_fake_daemon.h"
 
 namespace omega::client {
@@ -18,16 +19,7 @@ namespace fs = std::filesystem;
 
 const char* kScene = "omega: 1\nlights: [{type: constant, radiance: 1}]\n";
 
-std::string parse_error(const TempDir& d, const std::string& manifest) {
-    const auto p = d.write("m.yaml", manifest);
-    try {
-        parse_manifest(p.string());
-    } catch (const ClientError& e) {
-        EXPECT_EQ(e.exit_code(), kExitBadInput);
-        return std::string(e.what()).substr(p.string().size());
-    }
-    return "(accepted)";
-}
+std::string parse_error(const TempDir& d, const std::string& m) { return test::manifest_parse_error(d, m); }
 
 TEST(BatchManifest, ExpandsFramesAndMatrixWithDefaults) {
     TempDir d;

@@ -4,6 +4,8 @@
 #include <map>
 
 #include "asset_scan.h"
+#include "client_error.h"
+#include "io/file_gate.h"
 #include "scene/scene_files.h"
 
 namespace omega::client {
@@ -14,7 +16,14 @@ std::string scene_content_hash(const std::string& scene_path, const SceneDesc& d
     std::map<std::string, std::string> files;
     for_each_scene_file(desc, [&](const SceneFileRef& f) {
         const std::string& name = f.written.empty() ? f.file : f.written;
-        if (!files.count(name)) files[name] = sha256_file(f.file);
+        // Through the scene's gate, as the loaders read it (unconfined for a local render).
+        if (!files.count(name)) {
+            try {
+                files[name] = sha256_bytes(scene_gate(desc).read(f.file, FileGate::kDefaultMaxBytes, f.written));
+            } catch (const std::exception& e) {
+                throw ClientError(kExitBadInput, f.prefix() + e.what());
+            }
+        }
     });
     std::string text = "omega-scene-v1\nscene " + sha256_file(scene_path) + "\n";
     for (const auto& [name, hash] : files) text += "file " + hash + " " + name + "\n";

@@ -9,6 +9,7 @@
 
 #include "batch_command.h"
 #include "slurm_batch.h"
+#include "batch_test_util.h"
 #include "test_fake_daemon.h"
 
 namespace omega::client {
@@ -18,16 +19,7 @@ using test::TempDir;
 namespace fs = std::filesystem;
 using namespace omega::client::slurm;
 
-std::string parse_error(const TempDir& d, const std::string& manifest) {
-    const auto p = d.write("m.yaml", manifest);
-    try {
-        parse_manifest(p.string());
-    } catch (const ClientError& e) {
-        EXPECT_EQ(e.exit_code(), kExitBadInput);
-        return std::string(e.what()).substr(p.string().size());
-    }
-    return "(accepted)";
-}
+std::string parse_error(const TempDir& d, const std::string& m) { return test::manifest_parse_error(d, m); }
 
 TEST(SlurmManifest, ParsesTheSlurmKeys) {
     TempDir d;

@@ -126,16 +126,7 @@ private:
         }
         return {};
     }
-    double number(pugi::xml_node c, const std::string& key) const {
-        std::string s = attr(c, "value", key);
-        double v = 0;
-        const char* b = s.data();
-        if (!s.empty() && s[0] == '+') ++b;
-        auto [end, ec] = std::from_chars(b, s.data() + s.size(), v);
-        if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v))
-            fail(c, key, "expected a finite number, got '" + s + "'");
-        return v;
-    }
+    double number(pugi::xml_node c, const std::string& key) const { return to_double(attr(c, "value", key), c, key); }
     // A scalar value as YAML text, checked by the section parsers later.
     YAML::Node scalar(pugi::xml_node c, const std::string& key) const {
         std::string t = c.name();
