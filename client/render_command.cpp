@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -67,6 +68,8 @@ void add_render_command(CLI::App& app, RenderArgs& a) {
 }
 
 int run_render(const RenderArgs& a) {
+    // `--time` is the user's budget for the whole command: loading the scene counts.
+    const auto started = std::chrono::steady_clock::now();
     SceneDesc desc;
     std::unique_ptr<Scene> scene;
     MitsubaOptions xml;
@@ -115,6 +118,7 @@ int run_render(const RenderArgs& a) {
         rs.first_sample = range->begin;
     }
     rs.threads = a.threads;
+    rs.time_origin = started;
     rs.seed = a.seed;
     rs.integrator = desc.integrator;
     rs.strategy_images_max_k = a.strategies;
@@ -159,6 +163,7 @@ int run_render(const RenderArgs& a) {
     bar.finish();
 
     std::string out = a.output.empty() ? default_output(a.scene) : a.output;
+    set_exr_threads(resolve_threads(a.threads));  // the workers are idle now: compress in parallel
     ExrMeta meta;
     meta.spp = last.spp - rs.first_sample;
     meta.time_s = last.elapsed_s;

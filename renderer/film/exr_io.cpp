@@ -15,6 +15,7 @@
 #include <ImfIntAttribute.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+#include <ImfThreading.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -28,6 +29,8 @@
 #include "film/film.h"
 
 namespace omega {
+
+void set_exr_threads(int threads) { Imf::setGlobalThreadCount(std::max(0, threads)); }
 
 namespace {
 

@@ -152,6 +152,10 @@ struct ExrMeta {
 // the old file or the new one, never a partial one.
 void write_exr(const std::string& path, const Film& film, const ExrMeta& meta);
 
+// Threads OpenEXR may use to compress (and decompress) blocks of one file; process-wide. Call it
+// once at start-up: a 1024² image compresses in about a third of a second on one thread.
+void set_exr_threads(int threads);
+
 // Reads an RGB EXR (any channels R,G,B; var.* if present) for tests and comparisons.
 struct ExrImage {
     int width = 0, height = 0;  // data window size

@@ -45,14 +45,28 @@ RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
     }
 }
 
-void RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0,
-                                          long long s1) {
+bool RenderSession::tile_may_start() {
+    if (aborted() || pass_cut_.load(std::memory_order_relaxed)) return false;
+    if (cut_at_ && now() >= *cut_at_) {
+        pass_cut_.store(true, std::memory_order_relaxed);
+        return false;
+    }
+    return true;
+}
+
+long long RenderSession::render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0,
+                                               long long s1) {
     // Every sample index is one batch: sample i of every pixel's camera subpath plus the splats
     // of every pixel's light subpath i. The batches are i.i.d. estimates of the image, so their
     // spread is the variance, and they reach the film in index order whatever the passes were:
     // a render resumed at any pass boundary, or cut into passes by time, adds exactly the same
     // batches in the same order as one that ran in one go (bit-identical mean and variance).
-    for (long long i = s0; i < s1 && !aborted(); ++i) render_sample_index(arena, tiles, i);
+    long long i = s0;
+    for (; i < s1 && !aborted(); ++i) {
+        render_sample_index(arena, tiles, i);
+        if (pass_cut_.load(std::memory_order_relaxed)) break;  // batch i is in the film only in part
+    }
+    return i;
 }
 
 void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long i) {
@@ -61,9 +75,13 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
     const uint64_t width = uint64_t(sensor.width);
     const double inv_light_paths_per_sample = 1.0 / double(std::max<long long>(1, crop.area()));
     std::vector<Vec3d>& sums = batch_sums_;
+    std::vector<Vec3d>& splats = batch_splats_;
     sums.assign(size_t(crop.area()), Vec3d(0.0));
-    auto at = [&](int x, int y) -> Vec3d& { return sums[size_t(y - crop.y0) * size_t(crop.width()) + size_t(x - crop.x0)]; };
+    splats.assign(size_t(crop.area()), Vec3d(0.0));
+    auto index = [&](int x, int y) { return size_t(y - crop.y0) * size_t(crop.width()) + size_t(x - crop.x0); };
     const Filter& filter = film_.filter();
+    // Which tiles ran: a batch cut at the time limit keeps only their pixels (below).
+    std::vector<unsigned char> ran(tiles.size(), 0);
 
     // Tiles run in waves; each wave's splats are merged in tile order, so the sums are the same
     // for any thread count while memory stays bounded by the wave.
@@ -81,7 +99,8 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                     std::vector<Splat>& local = sample_splats_.local();
                     std::vector<StrategyContribution>* per = strategies_ ? &sample_strategies_.local() : nullptr;
                     for (size_t ti = range.begin(); ti != range.end(); ++ti) {
-                        if (aborted()) return;
+                        if (!tile_may_start()) return;
+                        ran[ti] = 1;
                         const Rect& tile = tiles[ti];
                         auto& out = tile_splats[ti - w0];
                         for (int y = tile.y0; y < tile.y1; ++y)
@@ -101,7 +120,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                                     ++st.nonfinite;  // the whole sample is dropped, splats included
                                     continue;
                                 }
-                                at(x, y) += Vec3d(L);
+                                sums[index(x, y)] += Vec3d(L);
                                 out.insert(out.end(), local.begin(), local.end());
                                 if (per)
                                     for (const auto& c : *per) {
@@ -119,12 +138,31 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
         for (const auto& list : tile_splats)
             for (const Splat& sp : list)
                 for_each_filter_pixel(filter, crop, sp.film, [&](int x, int y, double f) {
-                    at(x, y) += Vec3d(sp.value) * (f * inv_light_paths_per_sample);
+                    splats[index(x, y)] += Vec3d(sp.value) * (f * inv_light_paths_per_sample);
                 });
     }
     if (aborted()) return;
-    for (int y = crop.y0; y < crop.y1; ++y)
-        for (int x = crop.x0; x < crop.x1; ++x) film_.add_weighted(x, y, at(x, y), 1.0);
+    if (!pass_cut_.load(std::memory_order_relaxed)) {
+        for (int y = crop.y0; y < crop.y1; ++y)
+            for (int x = crop.x0; x < crop.x1; ++x) film_.add_weighted(x, y, sums[index(x, y)] + splats[index(x, y)], 1.0);
+        return;
+    }
+    // Cut at the time limit: the light paths that ran are a uniform subset of the batch's (their
+    // randomness does not depend on where their id lies), so their splats, rescaled to that
+    // count, still estimate the light-path part without bias. The batch is added only where the
+    // camera part ran too; other pixels simply hold one batch fewer.
+    long long traced = 0;
+    for (size_t t = 0; t < tiles.size(); ++t)
+        if (ran[t]) traced += tiles[t].area();
+    if (traced == 0) return;
+    const double rescale = double(crop.area()) / double(traced);
+    for (size_t t = 0; t < tiles.size(); ++t) {
+        if (!ran[t]) continue;
+        const Rect& r = tiles[t];
+        for (int y = r.y0; y < r.y1; ++y)
+            for (int x = r.x0; x < r.x1; ++x)
+                film_.add_weighted(x, y, sums[index(x, y)] + splats[index(x, y)] * rescale, 1.0);
+    }
 }
 
 void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats) {
@@ -160,8 +198,13 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
 
     tbb::task_arena arena(resolve_threads(settings_.threads));
     auto& stats = stats_;
-    const auto t_start = Clock::now();
-    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t_start).count(); };
+    const auto t_start = now();
+    auto elapsed = [&] { return std::chrono::duration<double>(now() - t_start).count(); };
+    // The time limit counts from the origin the caller gave (omega render: its own start).
+    const auto origin = settings_.time_origin.value_or(t_start);
+    auto budget_used = [&] { return std::chrono::duration<double>(now() - origin).count(); };
+    // Strategy images are a diagnostic of whole batches: their passes are never cut.
+    const bool may_cut = halt.time_s && !strategies_;
 
     PassReport report;
     report.spp = settings_.first_sample;
@@ -171,15 +214,22 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
         long long n = pass_spp;
         if (spp_limit >= 0) n = std::min(n, spp_limit - s0);
         if (halt.time_s && report.pass > 0 && report.samples_per_s > 0) {
-            // Size the pass to the time left so a time limit is overshot by little.
-            double left = *halt.time_s - elapsed();
-            long long fit = (long long)(left * report.samples_per_s / double(std::max<long long>(1, pixels)));
+            // Size the pass to the time left; the tile that crosses the limit is the last to start.
+            double left = *halt.time_s - budget_used();
+            long long fit = (long long)std::ceil(left * report.samples_per_s / double(std::max<long long>(1, pixels)));
             n = std::clamp(fit, 1LL, n);
         }
         if (n <= 0) break;
         const long long s1 = s0 + n;
+        // A pass may be cut at the limit only once every pixel has a sample: an image with
+        // unrendered pixels is no estimate at all.
+        pass_cut_.store(false, std::memory_order_relaxed);
+        cut_at_.reset();
+        if (may_cut && (report.pass > 0 || settings_.first_sample > 0))
+            cut_at_ = origin + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(*halt.time_s));
+        long long complete = s0;  // samples every pixel holds after the pass, if it is cut
         if (bdpt_) {
-            render_pass_splatting(arena, tiles, s0, s1);
+            complete = render_pass_splatting(arena, tiles, s0, s1);
         } else {
             arena.execute([&] {
                 tbb::parallel_for(
@@ -187,7 +237,7 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
                     [&](const tbb::blocked_range<size_t>& r) {
                         TracerStats& st = stats.local();
                         for (size_t t = r.begin(); t != r.end(); ++t) {
-                            if (aborted()) return;
+                            if (!tile_may_start()) return;
                             render_tile(tiles[t], s0, s1, st);
                         }
                     },
@@ -197,7 +247,8 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
         if (aborted()) break;  // a partial pass is not reported as complete
 
         report.pass += 1;
-        report.spp = s1;
+        report.cut = pass_cut_.load(std::memory_order_relaxed);
+        report.spp = report.cut ? complete : s1;
         report.elapsed_s = elapsed();
         TracerStats total;
         for (const auto& s : stats) {
@@ -216,7 +267,7 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
         if (on_pass) on_pass(report);
 
         if (spp_limit >= 0 && report.spp >= spp_limit) break;
-        if (halt.time_s && report.elapsed_s >= *halt.time_s) break;
+        if (halt.time_s && (report.cut || budget_used() >= *halt.time_s)) break;
         if (halt.target_error && report.spp >= kMinSppForErrorHalt && report.error.mean_rel_error <= *halt.target_error)
             break;
         // Aim for passes of about kPassSeconds so progress, checkpoints and halts stay responsive;

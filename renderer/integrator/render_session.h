@@ -5,7 +5,9 @@
 // Determinism: sample i of pixel p draws from Rng::for_sample(seed, p, i) and each pixel belongs
 // to exactly one tile, so the film is bit-identical for any thread count or tile order.
 #include <atomic>
+#include <chrono>
 #include <functional>
+#include <optional>
 #include <memory>
 
 #include <tbb/enumerable_thread_specific.h>
@@ -27,6 +29,12 @@ struct RenderSettings {
     long long first_sample = 0;  // resume: sample indices below this are already in the film
     IntegratorDesc integrator;
     int strategy_images_max_k = 0;  // > 0: record per-(s,t) images up to this path length (light, bdpt)
+    // When halt.time_s starts counting (default: when run() starts). `omega render` passes its own
+    // start, so that loading the scene is inside the budget the user gave.
+    std::optional<std::chrono::steady_clock::time_point> time_origin;
+    // What time limits read (null: steady_clock::now). Tests inject a deterministic clock; it is
+    // called from the worker threads, once per tile.
+    std::function<std::chrono::steady_clock::time_point()> clock;
 };
 
 struct PassReport {
@@ -37,6 +45,9 @@ struct PassReport {
     double rays_per_s = 0;
     uint64_t rays = 0, samples = 0, nonfinite = 0;
     uint64_t mis_errors = 0;  // MIS weights computed as non-finite (contribution dropped)
+    // The pass was cut at the time limit: tiles not started by then got none of its samples, so
+    // some pixels hold more than `spp` (the film's per-pixel counts keep every mean unbiased).
+    bool cut = false;
     ErrorEstimate error;
 };
 
@@ -61,9 +72,12 @@ public:
     // Strategies of the light and bdpt integrators the scene cannot use; see pathspace/classify.h.
 private:
     void render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats);
+    // Any thread: whether a tile may still start in this pass (false once the pass is cut).
+    bool tile_may_start();
     // Light tracing and BDPT: samples [s0, s1) of every pixel, one batch per sample index (splats
-    // have no per-pixel sample count, so variance comes from the spread of batches).
-    void render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0, long long s1);
+    // have no per-pixel sample count, so variance comes from the spread of batches). Returns the
+    // end of the batches that reached every pixel (s1 unless the pass was cut).
+    long long render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0, long long s1);
     // One batch of a splatting integrator: sample index i of every pixel, into the film.
     void render_sample_index(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long i);
 
@@ -77,8 +91,16 @@ private:
     tbb::enumerable_thread_specific<TracerStats> stats_;  // cache-aligned per thread
     tbb::enumerable_thread_specific<BdptScratch> scratch_;
     tbb::enumerable_thread_specific<std::vector<Splat>> sample_splats_;
-    std::vector<Vec3d> batch_sums_;  // crop-sized, one batch's pixel sums (driver thread only)
+    std::vector<Vec3d> batch_sums_;    // crop-sized, one batch's camera estimates (driver thread only)
+    std::vector<Vec3d> batch_splats_;  // crop-sized, one batch's light-path splats (driver thread only)
     std::atomic<bool> aborted_{false};
+    // Time limit of the current pass: set by run() on the driver thread before the pass starts,
+    // read by the workers. A pass may be cut only when every pixel already has a sample.
+    std::optional<std::chrono::steady_clock::time_point> cut_at_;
+    std::atomic<bool> pass_cut_{false};
+    std::chrono::steady_clock::time_point now() const {
+        return settings_.clock ? settings_.clock() : std::chrono::steady_clock::now();
+    }
 };
 
 // Number of worker threads `threads` resolves to (0 = hardware concurrency).
