@@ -4,6 +4,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 
@@ -41,16 +42,19 @@ ExrMeta meta_of(const FilmSnapshot& s) {
 
 }  // namespace
 
+EncodedTile encode_tile(const Film& film, const Rect& r, const ExrMeta& meta) {
+  auto bytes = encode_exr_tile(film, r, meta);
+  EncodedTile t;
+  t.rect = protocol::Rect{std::uint32_t(r.x0), std::uint32_t(r.y0), std::uint32_t(r.x1), std::uint32_t(r.y1)};
+  t.exr = std::make_shared<const std::string>(bytes.begin(), bytes.end());
+  return t;
+}
+
 std::vector<EncodedTile> encode_tiles(const Film& film, int tile_size, const FilmSnapshot& meta) {
   std::vector<Rect> rects = film.tiles(tile_size);
   std::vector<EncodedTile> out(rects.size());
   ExrMeta m = meta_of(meta);
-  tbb::parallel_for(std::size_t(0), rects.size(), [&](std::size_t i) {
-    const Rect& r = rects[i];
-    auto bytes = encode_exr_tile(film, r, m);
-    out[i].rect = protocol::Rect{std::uint32_t(r.x0), std::uint32_t(r.y0), std::uint32_t(r.x1), std::uint32_t(r.y1)};
-    out[i].exr = std::make_shared<const std::string>(bytes.begin(), bytes.end());
-  });
+  tbb::parallel_for(std::size_t(0), rects.size(), [&](std::size_t i) { out[i] = encode_tile(film, rects[i], m); });
   return out;
 }
 
@@ -59,8 +63,12 @@ std::string encode_image(const Film& film, const FilmSnapshot& meta) {
   return std::string(bytes.begin(), bytes.end());
 }
 
-RenderWorker::RenderWorker(WorkerSpec spec, Log& log, PassFn on_pass, FinishFn on_finish)
-    : spec_(std::move(spec)), log_(log), on_pass_(std::move(on_pass)), on_finish_(std::move(on_finish)) {}
+RenderWorker::RenderWorker(WorkerSpec spec, Log& log, PassFn on_pass, FinishFn on_finish, TileFn on_tile)
+    : spec_(std::move(spec)),
+      log_(log),
+      on_pass_(std::move(on_pass)),
+      on_finish_(std::move(on_finish)),
+      on_tile_(std::move(on_tile)) {}
 
 RenderWorker::~RenderWorker() {
   request_stop(StopKind::now);
@@ -160,6 +168,32 @@ void RenderWorker::run() {
     }
     log_.info("job {}: rendering from {} spp ({} threads)", spec_.job, rs.first_sample, resolve_threads(rs.threads));
 
+    // Tiles stream as they finish (path tracing; RenderSession::set_on_tile) while someone
+    // watches. A pass whose every tile went out that way needs no encoding at its boundary.
+    const std::size_t tile_count = session.film().tiles(spec_.tile_size).size();
+    std::atomic<std::size_t> streamed{0};
+    std::atomic<std::uint64_t> pass_in_progress{base_pass + 1};
+    std::atomic<double> last_rel_error{resume && resume->rel_error ? *resume->rel_error : 0.0};
+    const auto run_start = Clock::now();
+    if (on_tile_) {
+      session.set_on_tile([&](const Rect& rect, long long spp) {  // render threads
+        if (!watched_.load()) return;
+        ExrMeta m;
+        m.spp = spp;
+        m.time_s = base_elapsed + std::chrono::duration<double>(Clock::now() - run_start).count();
+        m.integrator = integrator_name(desc.integrator.type);
+        m.seed = spec_.seed;
+        m.rel_error = last_rel_error.load();
+        TileUpdate t;
+        t.job = spec_.job;
+        t.pass = pass_in_progress.load();
+        t.spp = static_cast<std::uint64_t>(spp);
+        t.tile = encode_tile(session.film(), rect, m);
+        streamed.fetch_add(1);
+        on_tile_(std::move(t));
+      });
+    }
+
     auto last_ckpt = Clock::now();
     PassReport final_report = session.run([&](const PassReport& r) {
       auto snap = std::make_shared<FilmSnapshot>();
@@ -196,7 +230,10 @@ void RenderWorker::run() {
       u.progress.elapsed_s = snap->elapsed_s;
       u.progress.rel_error = snap->rel_error;
       u.progress.samples_per_s = r.samples_per_s;
-      if (watched_.load()) u.tiles = encode_tiles(session.film(), spec_.tile_size, *snap);
+      u.tiles_streamed = streamed.exchange(0) == tile_count && !r.cut;
+      if (watched_.load() && !u.tiles_streamed) u.tiles = encode_tiles(session.film(), spec_.tile_size, *snap);
+      pass_in_progress.store(snap->pass + 1);
+      if (snap->rel_error) last_rel_error.store(*snap->rel_error);
       on_pass_(std::move(u));
       if (draining) session.abort();  // stop at this boundary: the film is clean and on disk
     });

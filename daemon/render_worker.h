@@ -37,7 +37,16 @@ struct PassUpdate {
   std::shared_ptr<const FilmSnapshot> snapshot;
   FilmDesc film;
   protocol::ProgressInfo progress;
-  std::vector<EncodedTile> tiles;  // empty unless someone watches
+  std::vector<EncodedTile> tiles;  // empty unless someone watches and the pass did not stream them
+  bool tiles_streamed = false;     // every tile of the pass went out as a TileUpdate already
+};
+
+// One tile streamed in the middle of a pass (path tracing): its pixels hold `spp` samples.
+struct TileUpdate {
+  std::uint64_t job = 0;
+  std::uint64_t pass = 0;  // the pass in progress
+  std::uint64_t spp = 0;
+  EncodedTile tile;
 };
 
 struct WorkerResult {
@@ -67,8 +76,10 @@ class RenderWorker {
   // Both callbacks run on the driver thread; they must only hand work to the loop (post).
   using PassFn = std::function<void(PassUpdate)>;
   using FinishFn = std::function<void(WorkerResult)>;
+  // Runs on the render threads (several at once) while someone watches; must only post.
+  using TileFn = std::function<void(TileUpdate)>;
 
-  RenderWorker(WorkerSpec spec, Log& log, PassFn on_pass, FinishFn on_finish);
+  RenderWorker(WorkerSpec spec, Log& log, PassFn on_pass, FinishFn on_finish, TileFn on_tile = {});
   ~RenderWorker();  // joins
   RenderWorker(const RenderWorker&) = delete;
   RenderWorker& operator=(const RenderWorker&) = delete;
@@ -91,6 +102,7 @@ class RenderWorker {
   Log& log_;
   PassFn on_pass_;
   FinishFn on_finish_;
+  TileFn on_tile_;
   std::thread thread_;
   std::atomic<int> stop_{0};
   std::atomic<bool> watched_{false};
@@ -98,6 +110,8 @@ class RenderWorker {
   omega::RenderSession* session_ = nullptr;  // set by the driver while run() is in progress
 };
 
+// Any thread: encodes one tile of a film (whose pixels no thread is writing).
+EncodedTile encode_tile(const Film& film, const Rect& rect, const ExrMeta& meta);
 // Any thread: encodes every tile of a film (in parallel) for subscribers.
 std::vector<EncodedTile> encode_tiles(const Film& film, int tile_size, const FilmSnapshot& meta);
 // Any thread: the whole film as one in-memory EXR.

@@ -115,6 +115,7 @@ class Server : public FrameSink {
   void reschedule_now();  // throws on a store error
   void start_job(const JobRecord& r);
   void on_pass(PassUpdate u);
+  void on_tile(TileUpdate t);
   void on_finish(WorkerResult r);
   // Records a finished or stopped worker's outcome in the store and tells the subscribers.
   // Throws on a store error, having changed nothing that a later call would not redo.

@@ -196,6 +196,13 @@ void Server::start_job(const JobRecord& r) {
           on_finish(std::move(res));
           flush_dirty();
         });
+      },
+      // Render threads, while someone watches: each finished tile goes out at once.
+      [this](TileUpdate t) {
+        loop_.post([this, t = std::move(t)]() mutable {
+          on_tile(std::move(t));
+          flush_dirty();
+        });
       });
   worker->set_watched(publisher_.watchers(r.id) > 0);
   store_->set_state(r.id, JobState::running);  // throws before the worker starts: still queued
@@ -222,8 +229,14 @@ void Server::on_pass(PassUpdate u) {
     }
   }
   if (!u.tiles.empty()) publisher_.update_tiles(u.job, u.tiles, u.progress.pass, u.progress.spp);
+  if (u.tiles_streamed) publisher_.tiles_complete(u.job, u.progress.spp);
   publisher_.progress(u.job, r->state, u.progress);
   log_.debug("job {}: pass {} done, {} spp, {:.2f} s", u.job, u.progress.pass, u.progress.spp, u.progress.elapsed_s);
+}
+
+void Server::on_tile(TileUpdate t) {
+  if (active_.find(t.job) == active_.end()) return;  // the job stopped since: its boundary rules
+  publisher_.update_tile(t.job, t.tile, t.pass, t.spp);
 }
 
 void Server::on_finish(WorkerResult res) {

@@ -53,20 +53,35 @@ void TilePublisher::drop_connection(std::uint64_t conn) {
   for (auto& [job, e] : jobs_) std::erase_if(e.subs, [&](const Sub& s) { return s.conn == conn; });
 }
 
+void TilePublisher::store_tile(std::uint64_t job, JobEntry& e, const EncodedTile& et, std::uint64_t pass,
+                               std::uint64_t spp) {
+  TileState& t = e.tiles[slot_of(et.rect)];
+  if (t.exr && spp < t.version) return;  // a streamed tile is newer than its pass's boundary copy
+  t.rect = et.rect;
+  t.pass = pass;
+  t.spp = spp;
+  t.version = spp;
+  t.exr = et.exr;
+  for (const Sub& s : e.subs) send_tile(s, job, t);
+}
+
 void TilePublisher::update_tiles(std::uint64_t job, const std::vector<EncodedTile>& tiles, std::uint64_t pass,
                                  std::uint64_t spp) {
   JobEntry& e = jobs_[job];
   if (spp < e.tiles_spp || tiles.empty()) return;
   e.tiles_spp = spp;
-  for (const EncodedTile& et : tiles) {
-    TileState& t = e.tiles[slot_of(et.rect)];
-    t.rect = et.rect;
-    t.pass = pass;
-    t.spp = spp;
-    t.version = spp;
-    t.exr = et.exr;
-    for (const Sub& s : e.subs) send_tile(s, job, t);
-  }
+  for (const EncodedTile& et : tiles) store_tile(job, e, et, pass, spp);
+}
+
+void TilePublisher::update_tile(std::uint64_t job, const EncodedTile& tile, std::uint64_t pass, std::uint64_t spp) {
+  JobEntry& e = jobs_[job];
+  if (spp <= e.tiles_spp) return;
+  store_tile(job, e, tile, pass, spp);
+}
+
+void TilePublisher::tiles_complete(std::uint64_t job, std::uint64_t spp) {
+  JobEntry& e = jobs_[job];
+  e.tiles_spp = std::max(e.tiles_spp, spp);
 }
 
 void TilePublisher::progress(std::uint64_t job, protocol::JobState state, const protocol::ProgressInfo& p) {

@@ -34,8 +34,13 @@ class TilePublisher {
   bool unsubscribe(std::uint64_t job, std::uint64_t conn, std::uint64_t sub_id);
   void drop_connection(std::uint64_t conn);
 
-  // New tiles (version = their spp, so versions only grow). Older than what is held: ignored.
+  // New tiles of a whole pass (version = their spp, so versions only grow). A tile older than
+  // the one held is ignored.
   void update_tiles(std::uint64_t job, const std::vector<EncodedTile>& tiles, std::uint64_t pass, std::uint64_t spp);
+  // One tile finished in the middle of a pass (path tracing), sent at once.
+  void update_tile(std::uint64_t job, const EncodedTile& tile, std::uint64_t pass, std::uint64_t spp);
+  // Every tile held has reached spp (they streamed one by one during the pass).
+  void tiles_complete(std::uint64_t job, std::uint64_t spp);
   void progress(std::uint64_t job, protocol::JobState state, const protocol::ProgressInfo& p);
   // Sends done to every subscriber and ends their subscriptions. Later subscribers get the
   // tiles and done at once.
@@ -58,13 +63,14 @@ class TilePublisher {
   };
   struct JobEntry {
     std::map<std::uint64_t, TileState> tiles;  // by slot (x0 << 32 | y0), row-major order
-    std::uint64_t tiles_spp = 0;
+    std::uint64_t tiles_spp = 0;  // every tile held has at least this many samples
     std::vector<Sub> subs;
     std::optional<protocol::Progress> progress;  // id 0; stamped per subscriber
     std::optional<protocol::Done> done;
   };
   void send_tile(const Sub& s, std::uint64_t job, const TileState& t);
   void send_progress(const Sub& s, const protocol::Progress& p);
+  void store_tile(std::uint64_t job, JobEntry& e, const EncodedTile& et, std::uint64_t pass, std::uint64_t spp);
 
   FrameSink& sink_;
   std::map<std::uint64_t, JobEntry> jobs_;

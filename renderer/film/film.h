@@ -11,7 +11,9 @@
 // neighbouring tiles do not false-share. sample_position(), tiles() and the size queries read
 // no pixel data and are safe from any thread at any time. Everything that reads or resets pixels
 // (pixel(), estimate_error(), merge(), serialize(), clear(), write_exr, encode_exr_tile) must not
-// overlap any add_sample(): call them between passes.
+// overlap any add_sample(): call them between passes. pixel() and encode_exr_tile() read only
+// the pixels they are given, so they may run on a tile no thread is writing while others render
+// (the daemon streams a tile as soon as it is done).
 #include <array>
 #include <map>
 #include <cstdint>

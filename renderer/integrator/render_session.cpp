@@ -239,6 +239,7 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
                         for (size_t t = r.begin(); t != r.end(); ++t) {
                             if (!tile_may_start()) return;
                             render_tile(tiles[t], s0, s1, st);
+                            if (on_tile_ && !aborted()) on_tile_(tiles[t], s1);
                         }
                     },
                     tbb::simple_partitioner());

@@ -63,6 +63,13 @@ public:
     void abort() { aborted_.store(true, std::memory_order_relaxed); }
     bool aborted() const { return aborted_.load(std::memory_order_relaxed); }
 
+    // Path tracing: called on the worker thread that rendered `tile`, as soon as the tile holds
+    // samples [0, spp) of its pass, while other tiles are still rendering; it may read the
+    // tile's pixels (nothing else of the film). Light tracing and BDPT splat across tiles, so a
+    // tile is only final at the pass boundary: they never call it. Set before run().
+    using TileFn = std::function<void(const Rect& tile, long long spp)>;
+    void set_on_tile(TileFn fn) { on_tile_ = std::move(fn); }
+
     const Film& film() const { return film_; }
     Film& film() { return film_; }
     const RenderSettings& settings() const { return settings_; }
@@ -94,6 +101,7 @@ private:
     std::vector<Vec3d> batch_sums_;    // crop-sized, one batch's camera estimates (driver thread only)
     std::vector<Vec3d> batch_splats_;  // crop-sized, one batch's light-path splats (driver thread only)
     std::atomic<bool> aborted_{false};
+    TileFn on_tile_;
     // Time limit of the current pass: set by run() on the driver thread before the pass starts,
     // read by the workers. A pass may be cut only when every pixel already has a sample.
     std::optional<std::chrono::steady_clock::time_point> cut_at_;

@@ -1,10 +1,12 @@
 """Submit, stream and fetch: the streamed tiles and the fetched image equal, bit for bit, a local
 `omega render` of the same scene with the same seed and spp. Over the Unix socket and TCP; a scene
-with a mesh asset (sent once, then cached); a subscriber that joins after the end."""
+with a mesh asset (sent once, then cached); a subscriber that joins after the end. Path
+tracing's tiles go out as each finishes, not when the whole pass has."""
 import hashlib
 import os
+import time
 
-from harness import Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state, watch
+from harness import SLOWDOWN, Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state, watch
 
 SPP, SEED = 12, 7
 TRI_OBJ = b"v -0.5 0.2 -0.5\nv 0.5 0.2 -0.5\nv 0 1.2 0\nf 1 2 3\n"
@@ -100,8 +102,43 @@ def test_mesh_asset_cached_and_late_subscriber(tmp, daemons):
     assert f["type"] == "error" and f["code"] == "unknown_job", f
 
 
+def test_tiles_stream_before_their_pass_ends(tmp, daemons):
+    """A tile is published as soon as its pixels finish a pass. Measured against the pass's own
+    duration, so it holds on a loaded machine and under a sanitizer alike: without streaming,
+    every tile of a pass arrives together with that pass's progress."""
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    c = d.client()
+    size = 160 if SLOWDOWN > 1 else 384
+    a = c.submit(small_cornell(width=size, height=size, spp=4), name="stream", halt_=op.halt(spp=4))
+    sid = c.new_id()
+    c.send(op.job_request("subscribe", sid, a["job"]))
+    h, _ = c.recv_for(sid)
+    assert h["type"] == "ok", h
+    first_tile, seen, prev_elapsed = {}, [], 0.0
+    while True:
+        h, _ = c.recv_for(sid, timeout=120 * SLOWDOWN)
+        now = time.monotonic()
+        if h["type"] == "tile":
+            first_tile.setdefault(h["pass"], now)
+        elif h["type"] == "progress" and h["progress"]["pass"] in first_tile:
+            p = h["progress"]["pass"]
+            duration = h["progress"]["elapsed_s"] - prev_elapsed
+            seen.append((p, now - first_tile[p], duration))
+        elif h["type"] == "done":
+            break
+        if h["type"] == "progress":
+            prev_elapsed = h["progress"]["elapsed_s"]
+    assert seen, "no pass had both tiles and progress"
+    # The first tile of a pass leads its progress by most of the pass (one tile per thread, of
+    # 25-144 tiles, is all that must finish first).
+    assert any(lead >= 0.5 * dur and dur > 0.05 for (_, lead, dur) in seen), seen
+    assert "job 1: done" in d.log()
+
+
 if __name__ == "__main__":
     t = Test()
+    t.run(test_tiles_stream_before_their_pass_ends)
     t.run(test_stream_and_fetch_equal_local_render)
     t.run(test_mesh_asset_cached_and_late_subscriber)
     t.exit()
