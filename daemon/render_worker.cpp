@@ -168,6 +168,10 @@ void RenderWorker::run() {
     }
     log_.info("job {}: rendering from {} spp ({} threads)", spec_.job, rs.first_sample, resolve_threads(rs.threads));
 
+    if (spec_.share)
+      session.set_tile_runner([share = spec_.share, job = spec_.job](const std::function<void()>& work) {
+        share->run(job, work);
+      });
     // Tiles stream as they finish (path tracing; RenderSession::set_on_tile) while someone
     // watches. A pass whose every tile went out that way needs no encoding at its boundary.
     const std::size_t tile_count = session.film().tiles(spec_.tile_size).size();

@@ -14,6 +14,7 @@
 #include "daemon/checkpoint.h"
 #include "daemon/job_scene.h"
 #include "daemon/log.h"
+#include "daemon/thread_share.h"
 #include "film/film.h"
 #include "protocol/messages.h"
 
@@ -69,6 +70,7 @@ struct WorkerSpec {
   double checkpoint_interval_s = 30;
   std::vector<std::string> allowed_roots;
   std::shared_ptr<const FilmSnapshot> resume;  // null: read the checkpoint file, if any
+  ThreadShare* share = nullptr;  // the daemon's, not owned: outlives the worker; null: no sharing
 };
 
 class RenderWorker {

@@ -5,7 +5,8 @@
 // then submission (FIFO), while fewer than max_running jobs run. When every slot is taken and a
 // queued job has a strictly higher priority than the lowest-priority running job, that running
 // job is preempted: it stops at the next tile boundary, goes back to the queue and later resumes
-// from its last pass boundary. Running jobs share the --threads workers evenly.
+// from its last pass boundary. Running jobs share the --threads workers by priority weight
+// (thread_share.h).
 #include <cstdint>
 #include <vector>
 

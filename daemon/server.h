@@ -25,6 +25,7 @@
 #include "daemon/log.h"
 #include "daemon/render_worker.h"
 #include "daemon/signals.h"
+#include "daemon/thread_share.h"
 #include "daemon/tile_publisher.h"
 #include "daemon/tls.h"
 
@@ -132,7 +133,10 @@ class Server : public FrameSink {
   Config cfg_;
   EventLoop loop_;
   SignalFd signals_;
-  std::unique_ptr<tbb::global_control> tbb_limit_;  // caps all render arenas together at --threads
+  // Lets each running job's arena have every thread; share_ then keeps at most --threads tiles
+  // running daemon-wide, shared between the jobs by priority weight.
+  std::unique_ptr<tbb::global_control> tbb_limit_;
+  ThreadShare share_{1};
   std::unique_ptr<JobStore> store_;
   std::unique_ptr<AssetCache> assets_;
   std::vector<Listener> listeners_;

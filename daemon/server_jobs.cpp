@@ -182,6 +182,7 @@ void Server::start_job(const JobRecord& r) {
   spec.checkpoint_interval_s = cfg_.checkpoint_interval_s;
   spec.allowed_roots = cfg_.allowed_roots;
   spec.resume = memo_[r.id].snapshot;
+  spec.share = &share_;
   // Both callbacks run on the worker's driver thread and only post to the loop.
   auto worker = std::make_unique<RenderWorker>(
       std::move(spec), log_,
@@ -206,6 +207,7 @@ void Server::start_job(const JobRecord& r) {
       });
   worker->set_watched(publisher_.watchers(r.id) > 0);
   store_->set_state(r.id, JobState::running);  // throws before the worker starts: still queued
+  share_.add(r.id, share_weight(r.priority));
   publisher_.progress(r.id, JobState::running, r.progress);
   log_.info("job {}: started ('{}', priority {})", r.id, r.name, r.priority);
   worker->start();
@@ -244,6 +246,7 @@ void Server::on_finish(WorkerResult res) {
   if (it != active_.end()) {
     it->second.worker->join();
     active_.erase(it);
+    share_.remove(res.job);
   }
   if (res.last) memo_[res.job].snapshot = res.last;
   try {

@@ -368,6 +368,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
     case MessageType::set_priority:
       if (finished(r->state)) return bad_state();
       store_->set_priority(job, *priority);
+      share_.set_weight(job, share_weight(*priority));  // a running job's share changes at once
       log_.info("job {}: priority {} -> {} by {}", job, r->priority, *priority, c.user);
       break;
     case MessageType::delete_job: {

@@ -99,35 +99,40 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                     std::vector<Splat>& local = sample_splats_.local();
                     std::vector<StrategyContribution>* per = strategies_ ? &sample_strategies_.local() : nullptr;
                     for (size_t ti = range.begin(); ti != range.end(); ++ti) {
-                        if (!tile_may_start()) return;
-                        ran[ti] = 1;
-                        const Rect& tile = tiles[ti];
-                        auto& out = tile_splats[ti - w0];
-                        for (int y = tile.y0; y < tile.y1; ++y)
-                            for (int x = tile.x0; x < tile.x1; ++x) {
-                                uint64_t pixel = uint64_t(y) * width + uint64_t(x);
-                                Rng rng = Rng::for_sample(settings_.seed, pixel, uint64_t(i));
-                                Vec2 u_film{rng.next_1d(), rng.next_1d()};
-                                Vec2 u_lens{rng.next_1d(), rng.next_1d()};
-                                Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
-                                local.clear();
-                                if (per) per->clear();
-                                Rgb L = bdpt_->sample(ray, rng, st, scratch, local, per);
-                                ++st.samples;
-                                bool finite = is_finite(L);
-                                for (const Splat& sp : local) finite = finite && is_finite(sp.value);
-                                if (!finite) {
-                                    ++st.nonfinite;  // the whole sample is dropped, splats included
-                                    continue;
-                                }
-                                sums[index(x, y)] += Vec3d(L);
-                                out.insert(out.end(), local.begin(), local.end());
-                                if (per)
-                                    for (const auto& c : *per) {
-                                        if (c.splat) tile_strategy_splats[ti - w0].push_back(c);
-                                        else strategies_->add_camera(x, y, c);
+                        bool ran_tile = false;
+                        run_tile([&] {
+                            if (!tile_may_start()) return;
+                            ran_tile = true;
+                            ran[ti] = 1;
+                            const Rect& tile = tiles[ti];
+                            auto& out = tile_splats[ti - w0];
+                            for (int y = tile.y0; y < tile.y1; ++y)
+                                for (int x = tile.x0; x < tile.x1; ++x) {
+                                    uint64_t pixel = uint64_t(y) * width + uint64_t(x);
+                                    Rng rng = Rng::for_sample(settings_.seed, pixel, uint64_t(i));
+                                    Vec2 u_film{rng.next_1d(), rng.next_1d()};
+                                    Vec2 u_lens{rng.next_1d(), rng.next_1d()};
+                                    Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
+                                    local.clear();
+                                    if (per) per->clear();
+                                    Rgb L = bdpt_->sample(ray, rng, st, scratch, local, per);
+                                    ++st.samples;
+                                    bool finite = is_finite(L);
+                                    for (const Splat& sp : local) finite = finite && is_finite(sp.value);
+                                    if (!finite) {
+                                        ++st.nonfinite;  // the whole sample is dropped, splats included
+                                        continue;
                                     }
-                            }
+                                    sums[index(x, y)] += Vec3d(L);
+                                    out.insert(out.end(), local.begin(), local.end());
+                                    if (per)
+                                        for (const auto& c : *per) {
+                                            if (c.splat) tile_strategy_splats[ti - w0].push_back(c);
+                                            else strategies_->add_camera(x, y, c);
+                                        }
+                                }
+                        });
+                        if (!ran_tile) return;
                     }
                 },
                 tbb::simple_partitioner());
@@ -237,9 +242,14 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
                     [&](const tbb::blocked_range<size_t>& r) {
                         TracerStats& st = stats.local();
                         for (size_t t = r.begin(); t != r.end(); ++t) {
-                            if (!tile_may_start()) return;
-                            render_tile(tiles[t], s0, s1, st);
-                            if (on_tile_ && !aborted()) on_tile_(tiles[t], s1);
+                            bool ran = false;
+                            run_tile([&] {
+                                if (!tile_may_start()) return;
+                                render_tile(tiles[t], s0, s1, st);
+                                ran = true;
+                                if (on_tile_ && !aborted()) on_tile_(tiles[t], s1);
+                            });
+                            if (!ran) return;
                         }
                     },
                     tbb::simple_partitioner());

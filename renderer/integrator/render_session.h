@@ -70,6 +70,11 @@ public:
     using TileFn = std::function<void(const Rect& tile, long long spp)>;
     void set_on_tile(TileFn fn) { on_tile_ = std::move(fn); }
 
+    // Runs each tile's work, on the worker threads: the daemon shares its threads between jobs
+    // through it (daemon/thread_share.h). Null: the work runs directly. Set before run().
+    using TileRunner = std::function<void(const std::function<void()>& work)>;
+    void set_tile_runner(TileRunner r) { tile_runner_ = std::move(r); }
+
     const Film& film() const { return film_; }
     Film& film() { return film_; }
     const RenderSettings& settings() const { return settings_; }
@@ -102,6 +107,11 @@ private:
     std::vector<Vec3d> batch_splats_;  // crop-sized, one batch's light-path splats (driver thread only)
     std::atomic<bool> aborted_{false};
     TileFn on_tile_;
+    TileRunner tile_runner_;
+    void run_tile(const std::function<void()>& work) const {
+        if (tile_runner_) tile_runner_(work);
+        else work();
+    }
     // Time limit of the current pass: set by run() on the driver thread before the pass starts,
     // read by the workers. A pass may be cut only when every pixel already has a sample.
     std::optional<std::chrono::steady_clock::time_point> cut_at_;

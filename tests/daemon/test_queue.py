@@ -1,6 +1,7 @@
 """The durable queue: priorities (with preemption), FIFO among equals, pause, resume, cancel,
 re-prioritising, permissions and invalid states. A preempted or paused job resumes from its last
-pass boundary and still ends bit-identical to an uninterrupted local render."""
+pass boundary and still ends bit-identical to an uninterrupted local render. Jobs running side by
+side share the render threads by priority weight."""
 import os
 import re
 import time
@@ -101,8 +102,32 @@ def test_pause_resume_cancel_priority(tmp, daemons):
     assert h["code"] == "invalid_state", h
 
 
+def test_running_jobs_share_threads_by_priority(tmp, daemons):
+    """Two jobs rendering at once, priorities 10 and 0: weights 2^(10/10) and 1, so the first
+    gets two thirds of the thread time and twice the samples per second. Equal priorities split
+    evenly (docs/daemon.md, "Scheduling")."""
+    scene = small_cornell(width=96, height=96)
+    d = Daemon(tmp, config="max_running: 2\n").start()
+    daemons.append(d)
+    c = d.client()
+
+    def rates(p_hi, p_lo):
+        seconds = 3.0
+        hi = c.submit(scene, name="hi", priority=p_hi, halt_=op.halt(time_s=seconds))["job"]
+        lo = c.submit(scene, name="lo", priority=p_lo, halt_=op.halt(time_s=seconds))["job"]
+        a = wait_state(c, hi, {"done"}, timeout=60)
+        b = wait_state(c, lo, {"done"}, timeout=60)
+        return a["progress"]["samples_per_s"] / b["progress"]["samples_per_s"]
+
+    weighted = rates(10, 0)
+    assert 1.4 < weighted < 2.8, f"priority 10 against 0: samples/s ratio {weighted:.2f}, expected about 2"
+    even = rates(3, 3)
+    assert 0.72 < even < 1.38, f"equal priorities: samples/s ratio {even:.2f}, expected about 1"
+
+
 if __name__ == "__main__":
     t = Test()
     t.run(test_priorities_preemption_fifo)
     t.run(test_pause_resume_cancel_priority)
+    t.run(test_running_jobs_share_threads_by_priority)
     t.exit()
