@@ -150,7 +150,10 @@ void RenderWorker::run() {
     const std::uint64_t base_pass = resume ? resume->pass : 0;
     const std::uint64_t base_nonfinite = resume ? resume->nonfinite : 0;
     if (rs.halt.time_s) rs.halt.time_s = std::max(1e-3, *rs.halt.time_s - base_elapsed);
-    rs.threads = spec_.threads;
+    // Under a share, twice as many threads as tile slots: a job's threads that finish a tile
+    // must find another of its threads already waiting, or a freed slot falls to a lighter job
+    // (work conservation) and the heavier one cannot reach its share.
+    rs.threads = spec_.share ? 2 * resolve_threads(spec_.threads) : spec_.threads;
     rs.seed = spec_.seed;
     rs.tile_size = spec_.tile_size;
     rs.first_sample = resume ? static_cast<long long>(resume->spp) : 0;
@@ -166,7 +169,7 @@ void RenderWorker::run() {
       StopKind k = stop_requested();
       if (k != StopKind::none && k != StopKind::drain) session.abort();
     }
-    log_.info("job {}: rendering from {} spp ({} threads)", spec_.job, rs.first_sample, resolve_threads(rs.threads));
+    log_.info("job {}: rendering from {} spp ({} threads)", spec_.job, rs.first_sample, resolve_threads(spec_.threads));
 
     if (spec_.share)
       session.set_tile_runner([share = spec_.share, job = spec_.job](const std::function<void()>& work) {

@@ -32,7 +32,7 @@ void Server::apply_config(const Config& c) {
   tbb_limit_.reset();  // one global_control at a time
   const int threads = resolve_threads(c.threads);
   tbb_limit_ = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                     static_cast<std::size_t>(threads * std::max(1, c.max_running)));
+                                                     static_cast<std::size_t>(2 * threads * std::max(1, c.max_running)));
   share_.set_slots(threads);
 }
 

@@ -133,8 +133,8 @@ class Server : public FrameSink {
   Config cfg_;
   EventLoop loop_;
   SignalFd signals_;
-  // Lets each running job's arena have every thread; share_ then keeps at most --threads tiles
-  // running daemon-wide, shared between the jobs by priority weight.
+  // Lets each running job's arena have twice --threads (render_worker.cpp says why); share_
+  // then keeps at most --threads tiles running daemon-wide, shared by priority weight.
   std::unique_ptr<tbb::global_control> tbb_limit_;
   ThreadShare share_{1};
   std::unique_ptr<JobStore> store_;

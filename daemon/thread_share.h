@@ -1,7 +1,7 @@
 #pragma once
 // How running jobs share the render threads: in proportion to a weight derived from priority.
 //
-// Each job's render session may run on as many threads as the daemon has, but at most `slots`
+// Each job's render session runs on twice as many threads as the daemon has, but at most `slots`
 // tiles run at once, daemon-wide. When a slot frees, it goes to the waiting job that has used
 // the least thread time per unit of weight (stride scheduling, Waldspurger and Weihl 1995), so
 // over a few tiles each job's share of thread time is its weight over the sum of the running

@@ -28,7 +28,8 @@ struct Probe {
   }
 };
 
-// Threads per job, each running tiles until the clock says stop.
+// Threads per job, each running tiles until the clock says stop. Like the daemon, each job has
+// twice as many threads as slots, so one is waiting whenever another finishes a tile.
 void contend(ThreadShare& share, const std::vector<std::uint64_t>& jobs, int threads_per_job,
              std::chrono::milliseconds for_how_long, Probe& probe) {
   std::atomic<bool> stop{false};
@@ -58,7 +59,7 @@ TEST(ThreadShare, SharesFollowTheWeights) {
   share.add(1, share_weight(10));
   share.add(2, share_weight(0));
   Probe probe;
-  contend(share, {1, 2}, 2, 900ms, probe);
+  contend(share, {1, 2}, 4, 900ms, probe);
   EXPECT_LE(probe.most.load(), 2);
   const double ratio = share.used_s(1) / share.used_s(2);
   EXPECT_GT(ratio, 1.6) << share.used_s(1) << " s against " << share.used_s(2) << " s";
@@ -70,7 +71,7 @@ TEST(ThreadShare, EqualWeightsShareEvenly) {
   share.add(1, 1.0);
   share.add(2, 1.0);
   Probe probe;
-  contend(share, {1, 2}, 2, 600ms, probe);
+  contend(share, {1, 2}, 4, 600ms, probe);
   const double ratio = share.used_s(1) / share.used_s(2);
   EXPECT_GT(ratio, 0.8);
   EXPECT_LT(ratio, 1.25);
@@ -80,7 +81,7 @@ TEST(ThreadShare, AJobAloneGetsEverySlotWhateverItsWeight) {
   ThreadShare share(3);
   share.add(7, share_weight(-100));
   Probe probe;
-  contend(share, {7}, 3, 200ms, probe);
+  contend(share, {7}, 6, 200ms, probe);
   EXPECT_EQ(probe.most.load(), 3);
 }
 
@@ -88,10 +89,10 @@ TEST(ThreadShare, ANewcomerDoesNotMakeUpForTimeBeforeItRan) {
   ThreadShare share(2);
   share.add(1, 1.0);
   Probe probe;
-  contend(share, {1}, 2, 300ms, probe);
+  contend(share, {1}, 4, 300ms, probe);
   const double before = share.used_s(1);
   share.add(2, 1.0);
-  contend(share, {1, 2}, 2, 600ms, probe);
+  contend(share, {1, 2}, 4, 600ms, probe);
   const double ratio = (share.used_s(1) - before) / share.used_s(2);
   EXPECT_GT(ratio, 0.8);  // without the clock start, job 1 would get nothing for 300 ms
   EXPECT_LT(ratio, 1.25);
@@ -102,10 +103,10 @@ TEST(ThreadShare, AWeightChangeTakesEffect) {
   share.add(1, 1.0);
   share.add(2, 1.0);
   Probe probe;
-  contend(share, {1, 2}, 2, 300ms, probe);
+  contend(share, {1, 2}, 4, 300ms, probe);
   const double a = share.used_s(1), b = share.used_s(2);
   share.set_weight(2, share_weight(20));
-  contend(share, {1, 2}, 2, 900ms, probe);
+  contend(share, {1, 2}, 4, 900ms, probe);
   const double ratio = (share.used_s(2) - b) / (share.used_s(1) - a);
   EXPECT_GT(ratio, 3.0);
   EXPECT_LT(ratio, 5.5);
