@@ -9,6 +9,7 @@
 #include <assimp/scene.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -31,6 +32,7 @@ struct Merger {
     std::string error;
     bool any_uvs = false;
     bool flip_v = true;
+    const std::vector<int>* parts = nullptr;  // only these meshes; null or empty = all
 
     void visit(const aiNode* node, const aiMatrix4x4& parent, int depth) {
         if (depth > 256) {  // a cyclic or absurd node graph must not overflow the stack
@@ -46,6 +48,7 @@ struct Merger {
                 error = "node references a missing mesh";
                 return;
             }
+            if (parts && !parts->empty() && std::find(parts->begin(), parts->end(), int(mi)) == parts->end()) continue;
             add(scene->mMeshes[mi], m, nm);
         }
         for (unsigned c = 0; c < node->mNumChildren && error.empty(); ++c) visit(node->mChildren[c], m, depth + 1);
@@ -252,6 +255,11 @@ TriangleMesh load_mesh_file(const FileGate& gate, const std::string& path, const
         throw SceneError(fmt::format("{}cannot load mesh '{}': {}", at, name, clean(importer.GetErrorString())));
     Merger merger{scene, {}, true, {}};
     merger.flip_v = opt.flip_tex_coords;
+    merger.parts = &opt.parts;
+    for (int p : opt.parts)
+        if (p < 0 || unsigned(p) >= scene->mNumMeshes)
+            throw SceneError(fmt::format("{}mesh '{}': meshes: the file has no mesh {} (it has {})", at, name, p,
+                                         scene->mNumMeshes));
     merger.visit(scene->mRootNode, aiMatrix4x4(), 0);
     if (!merger.error.empty()) throw SceneError(fmt::format("{}mesh '{}': {}", at, name, merger.error));
     if (merger.out.indices.empty()) throw SceneError(fmt::format("{}mesh '{}' has no triangles", at, name));
