@@ -2,7 +2,7 @@
 # Omega's importer is tested on what a real DCC writes (issue 14). Optionally renders the same
 # scene with Cycles, the reference the importer's output is compared with.
 #
-#   blender -b --factory-startup --python tests/data/gltf/make_scene.py -- OUT_DIR [--cycles EXR]
+#   blender -b --factory-startup --python tests/data/gltf/make_scene.py -- OUT_DIR [--reference EXR [--spp N]]
 #
 # Writes OUT_DIR/blender_scene.gltf (+ .bin + textures) and OUT_DIR/blender_scene.glb.
 # Tested with Debian 12's Blender 3.4.1 (io_scene_gltf2 3.4): other versions may number things
@@ -16,7 +16,7 @@ import bpy
 
 argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else ["."]
 out_dir = argv[0]
-cycles_exr = argv[argv.index("--cycles") + 1] if "--cycles" in argv else None
+cycles_exr = argv[argv.index("--reference") + 1] if "--reference" in argv else None
 
 
 def write_png(path, w, h, pixel):
