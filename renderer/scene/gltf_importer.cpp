@@ -259,8 +259,12 @@ void GltfImporter::read_camera(const aiScene& s) {
             frame = frame * Mat4::scale({xmag, ymag, 1});
         } else {
             y["type"] = "perspective";
-            // Assimp stores 2 atan(tan(yfov / 2) aspect); glTF's own angle is the vertical one.
-            const double yfov = 2 * std::atan(std::tan(double(c.mHorizontalFOV) / 2) / aspect);
+            // glTF's angle is the vertical one. Assimp 5.2 stores yfov x aspect as the horizontal
+            // angle (linear, not through the tangents: 39.7 degrees for Blender's 38.55 at 4:3), so
+            // the JSON's own yfov is used, and Assimp's value only undone where it is missing.
+            double yfov = double(c.mHorizontalFOV) / aspect;
+            if (cams && size_t(pick) < cams.size() && cams[pick]["perspective"] && cams[pick]["perspective"]["yfov"])
+                yfov = cams[pick]["perspective"]["yfov"].as<double>();
             y["fov"] = num(yfov * 180 / kPi);
             y["fov_axis"] = "y";
         }
