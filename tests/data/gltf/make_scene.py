@@ -2,7 +2,10 @@
 # Omega's importer is tested on what a real DCC writes (issue 14). Optionally renders the same
 # scene with Cycles, the reference the importer's output is compared with.
 #
-#   blender -b --factory-startup --python tests/data/gltf/make_scene.py -- OUT_DIR [--reference EXR [--spp N]]
+#   blender -b --factory-startup --python tests/data/gltf/make_scene.py -- OUT_DIR [--reference EXR [--spp N] [--only NAME]]
+#
+# --only NAME renders the reference with one light alone (PointLight, SpotLight, SunLight or
+# EmissivePanel), to check each light's units on its own; the export is always the whole scene.
 #
 # Writes OUT_DIR/blender_scene.gltf (+ .bin + textures) and OUT_DIR/blender_scene.glb.
 # Tested with Debian 12's Blender 3.4.1 (io_scene_gltf2 3.4): other versions may number things
@@ -138,6 +141,14 @@ scene.world.color = (0, 0, 0)
 for fmt, ext in (("GLTF_SEPARATE", "gltf"), ("GLB", "glb")):
     bpy.ops.export_scene.gltf(filepath=f"{out_dir}/blender_scene.{ext}", export_format=fmt,
                               export_cameras=True, export_lights=True, export_apply=True)
+
+if cycles_exr and "--only" in argv:
+    only = argv[argv.index("--only") + 1]
+    for obj in list(scene.collection.objects):
+        if obj.type == "LIGHT" and obj.name != only:
+            bpy.data.objects.remove(obj)
+    if only != "EmissivePanel":
+        bpy.data.materials["Panel"].node_tree.nodes["Principled BSDF"].inputs["Emission Strength"].default_value = 0
 
 if cycles_exr:
     # The reference: Cycles, Standard view transform (no Filmic), linear EXR, no denoising.
