@@ -17,6 +17,8 @@
 using namespace omega;
 using omega::test::scene_error_of;
 using omega::test::TempDir;
+using omega::test::all_warnings;
+using omega::test::has_warning;
 
 namespace {
 
@@ -24,16 +26,6 @@ constexpr double kDegPi = 3.14159265358979323846;
 
 std::string blender_file(const std::string& name) {
     return (test::source_root() / "tests/data/gltf" / name).string();
-}
-bool has_warning(const SceneDesc& d, const std::string& part) {
-    for (const auto& w : d.warnings)
-        if (w.find(part) != std::string::npos) return true;
-    return false;
-}
-std::string all_warnings(const SceneDesc& d) {
-    std::string s;
-    for (const auto& w : d.warnings) s += w + "\n";
-    return s;
 }
 Vec3d column(const Mat4& m, int c) { return {m(0, c), m(1, c), m(2, c)}; }
 double length(const Vec3d& v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
