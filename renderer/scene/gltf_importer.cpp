@@ -303,8 +303,8 @@ void GltfImporter::read_lights(const aiScene& s) {
             const double inner = std::clamp(double(l.mAngleInnerCone) * 180 / kPi, outer * 1e-3, outer);
             y["cutoff_angle"] = num(outer);
             y["beam_width"] = num(inner);
-            note("spot lights fall off between the inner and outer cone along Omega's (Mitsuba's) curve, not glTF's "
-                 "smooth step in cos",
+            note("spot lights fall off between the inner and outer cone linearly in angle (Omega's, Mitsuba's), not "
+                 "as glTF's square of a ramp linear in cos",
                  object);
         } else if (l.mType == aiLightSource_DIRECTIONAL) {
             y["type"] = "directional";
