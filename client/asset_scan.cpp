@@ -175,9 +175,11 @@ ScannedScene scan_scene(const std::string& scene_path) {
         if (mesh) take_inner(a, written);
         add(std::move(a));
     };
-    // Textures: the reflectance of a named or an inline material.
+    // Textures: the reflectance of a named or an inline material (a plastic's diffuse_reflectance,
+    // which glTF imports give every textured dielectric, included).
     auto take_material = [&](YAML::Node m) {
-        if (m.IsMap() && m["reflectance"] && m["reflectance"].IsMap()) take(m["reflectance"]);
+        for (const char* key : {"reflectance", "diffuse_reflectance"})
+            if (m.IsMap() && m[key] && m[key].IsMap()) take(m[key]);
     };
     if (YAML::Node mats = root["materials"]; mats && mats.IsMap())
         for (auto it = mats.begin(); it != mats.end(); ++it) take_material(it->second);

@@ -1,5 +1,6 @@
 #pragma once
 // `omega import SCENE.xml [-o SCENE.yaml] [-D name=value]...`: Mitsuba XML -> scene format v1.
+// `omega import SCENE.gltf|.glb [-o SCENE.yaml] [--camera NAME]`: glTF 2.0 -> scene format v1.
 #include <CLI/CLI.hpp>
 
 #include <map>
@@ -12,6 +13,7 @@ struct ImportArgs {
     std::string scene;
     std::string output;
     std::vector<std::string> defines;  // name=value
+    std::string camera;                // glTF: the camera to use
 };
 
 void add_import_command(CLI::App& app, ImportArgs& args);

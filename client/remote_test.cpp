@@ -5,6 +5,8 @@
 #include <mutex>
 
 #include "asset_scan.h"
+#include "scene/gltf_importer.h"
+#include "scene/scene_writer.h"
 #include "job_commands.h"
 #include "submit_command.h"
 #include "test_fake_daemon.h"
@@ -126,6 +128,22 @@ TEST(AssetScan, FilesAMeshNamesTravelBesideIt) {
     EXPECT_EQ(by_name.count("shared/o.mtl"), 0u);
     ASSERT_FALSE(s.warnings.empty());
     EXPECT_NE(s.warnings.back().find("mesh 'far.obj' names"), std::string::npos) << s.warnings.back();
+}
+
+// A glTF scene travels as the YAML `omega import` writes beside it: the .gltf its shapes name, the
+// .bin buffer Assimp reads for it and the base colour texture go as assets, under their own names.
+TEST(AssetScan, ImportedGltfTravelsWithItsBufferAndTexture) {
+    TempDir d;
+    const fs::path data = fs::path(__FILE__).parent_path().parent_path() / "tests/data/gltf";
+    for (const char* f : {"blender_scene.gltf", "blender_scene.bin", "checker.png", "roughness.png"})
+        fs::copy_file(data / f, d.path / f);
+    write_scene_file(import_gltf_file((d.path / "blender_scene.gltf").string()), (d.path / "s.yaml").string());
+    ScannedScene s = scan_scene((d.path / "s.yaml").string());
+    std::map<std::string, std::string> by_name;
+    for (const auto& a : s.assets) by_name[a.name] = a.sha256;
+    EXPECT_EQ(by_name.size(), 3u);
+    for (const char* f : {"blender_scene.gltf", "blender_scene.bin", "checker.png"})
+        EXPECT_EQ(by_name.at(f), sha256_file((d.path / f).string())) << f;
 }
 
 TEST(Remote, UnreachableDaemonExits3NamingTheAddress) {

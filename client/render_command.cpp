@@ -41,7 +41,7 @@ std::string human_rate(double v) {
 
 void add_render_command(CLI::App& app, RenderArgs& a) {
     auto* cmd = app.add_subcommand("render", "Render a scene locally to an EXR file");
-    cmd->add_option("scene", a.scene, "Scene file (YAML format v1, or Mitsuba XML: *.xml)")->required();
+    cmd->add_option("scene", a.scene, "Scene file (YAML format v1, Mitsuba XML: *.xml, or glTF 2.0: *.gltf, *.glb)")->required();
     cmd->add_option("-o,--output", a.output, "Output EXR (default: the scene's name with .exr)");
     auto* spp = cmd->add_option("--spp", a.spp, "Samples per pixel")->check(CLI::PositiveNumber);
     auto* time = cmd->add_option("--time", a.time_s, "Render for this many seconds")->check(CLI::PositiveNumber);
@@ -65,6 +65,7 @@ void add_render_command(CLI::App& app, RenderArgs& a) {
         ->check(CLI::Range(1, 12))
         ->excludes(samples);
     cmd->add_option("-D,--define", a.defines, "Mitsuba XML scenes: set a <default> variable, name=value (repeatable)");
+    cmd->add_option("--camera", a.camera, "glTF scenes: render this camera (node or camera name; default: the first)");
 }
 
 int run_render(const RenderArgs& a) {
@@ -74,6 +75,7 @@ int run_render(const RenderArgs& a) {
     std::unique_ptr<Scene> scene;
     MitsubaOptions xml;
     if (!parse_defines(a.defines, xml.defines)) return 2;
+    xml.camera = a.camera;
     std::optional<SampleRange> range;
     if (!a.samples.empty()) {
         try {

@@ -21,6 +21,7 @@ struct RenderArgs {
     bool quiet = false;
     int strategies = 0;  // > 0: write per-(s,t) layers for path lengths up to this
     std::vector<std::string> defines;  // -D name=value, for Mitsuba XML scenes
+    std::string camera;                // --camera NAME, for glTF scenes
     std::string samples;  // "A:B": a partial render of sample indices [A, B), for `omega merge`
 };
 

@@ -9,6 +9,7 @@
 #include <assimp/scene.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -17,6 +18,7 @@
 #include <unordered_set>
 
 #include "io/file_gate.h"
+#include "scene/assimp_scene.h"
 #include "scene/scene_error.h"
 #include "scene/triangle_mesh.h"
 
@@ -31,6 +33,7 @@ struct Merger {
     std::string error;
     bool any_uvs = false;
     bool flip_v = true;
+    const std::vector<int>* parts = nullptr;  // only these meshes; null or empty = all
 
     void visit(const aiNode* node, const aiMatrix4x4& parent, int depth) {
         if (depth > 256) {  // a cyclic or absurd node graph must not overflow the stack
@@ -46,6 +49,7 @@ struct Merger {
                 error = "node references a missing mesh";
                 return;
             }
+            if (parts && !parts->empty() && std::find(parts->begin(), parts->end(), int(mi)) == parts->end()) continue;
             add(scene->mMeshes[mi], m, nm);
         }
         for (unsigned c = 0; c < node->mNumChildren && error.empty(); ++c) visit(node->mChildren[c], m, depth + 1);
@@ -214,10 +218,13 @@ std::mutex& assimp_mutex() {
     return m;
 }
 
+TriangleMesh merge_meshes(const aiScene* scene, const std::string& at, const std::string& name,
+                          const MeshFileOptions& opt);
+
 }  // namespace
 
-TriangleMesh load_mesh_file(const FileGate& gate, const std::string& path, const SourceLoc& loc,
-                            const MeshFileOptions& opt) {
+void read_assimp_scene(const FileGate& gate, const std::string& path, const SourceLoc& loc, const MeshFileOptions& opt,
+                       unsigned post_process, const std::function<void(const aiScene&)>& use) {
     std::string at = loc.key.empty() ? fmt::format("{}:{}: ", loc.file, loc.line)
                                      : fmt::format("{}:{}: {}: ", loc.file, loc.line, loc.key);
     const std::string name = opt.written.empty() ? gate.shown(path) : opt.written;
@@ -243,15 +250,37 @@ TriangleMesh load_mesh_file(const FileGate& gate, const std::string& path, const
     auto* io = new GateIOSystem(gate, std::filesystem::path(abs).parent_path().string(), opt);
     importer.SetIOHandler(io);  // the importer owns it
     importer.SetProgressHandler(new CancelPoll(opt.cancelled));
-    // No normal generation: a file without normals is shaded flat, as its author made it.
-    const aiScene* scene = importer.ReadFile(abs, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+    const aiScene* scene = importer.ReadFile(abs, post_process);
     if (opt.cancelled && opt.cancelled()) throw BuildCancelled();
     if (gate.is_confined() && !io->refusal().empty())
         throw SceneError(fmt::format("{}mesh '{}': {}", at, name, io->refusal()));
     if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode)
         throw SceneError(fmt::format("{}cannot load mesh '{}': {}", at, name, clean(importer.GetErrorString())));
+    use(*scene);
+}
+
+TriangleMesh load_mesh_file(const FileGate& gate, const std::string& path, const SourceLoc& loc,
+                            const MeshFileOptions& opt) {
+    std::string at = loc.key.empty() ? fmt::format("{}:{}: ", loc.file, loc.line)
+                                     : fmt::format("{}:{}: {}: ", loc.file, loc.line, loc.key);
+    const std::string name = opt.written.empty() ? gate.shown(path) : opt.written;
+    TriangleMesh mesh;
+    // No normal generation: a file without normals is shaded flat, as its author made it.
+    read_assimp_scene(gate, path, loc, opt, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices,
+                      [&](const aiScene& s) { mesh = merge_meshes(&s, at, name, opt); });
+    return mesh;
+}
+
+namespace {
+TriangleMesh merge_meshes(const aiScene* scene, const std::string& at, const std::string& name,
+                          const MeshFileOptions& opt) {
     Merger merger{scene, {}, true, {}};
     merger.flip_v = opt.flip_tex_coords;
+    merger.parts = &opt.parts;
+    for (int p : opt.parts)
+        if (p < 0 || unsigned(p) >= scene->mNumMeshes)
+            throw SceneError(fmt::format("{}mesh '{}': meshes: the file has no mesh {} (it has {})", at, name, p,
+                                         scene->mNumMeshes));
     merger.visit(scene->mRootNode, aiMatrix4x4(), 0);
     if (!merger.error.empty()) throw SceneError(fmt::format("{}mesh '{}': {}", at, name, merger.error));
     if (merger.out.indices.empty()) throw SceneError(fmt::format("{}mesh '{}' has no triangles", at, name));
@@ -260,5 +289,6 @@ TriangleMesh load_mesh_file(const FileGate& gate, const std::string& path, const
     if (!merger.any_uvs) merger.out.uvs.clear();
     return std::move(merger.out);
 }
+}  // namespace
 
 }  // namespace omega

@@ -1,4 +1,5 @@
 #include "scene/mitsuba_importer.h"
+#include "scene/gltf_importer.h"
 #include "scene/mitsuba_importer_impl.h"
 
 #include <fmt/format.h>
@@ -572,7 +573,10 @@ bool is_mitsuba_path(const std::string& path) {
 }
 
 SceneDesc load_scene_file(const std::string& path, const MitsubaOptions& options) {
+    if (!options.camera.empty() && !is_gltf_path(path))
+        throw SceneError(fmt::format("{}: --camera {}: only glTF scenes name their cameras", path, options.camera));
     if (is_mitsuba_path(path)) return import_mitsuba_file(path, options);
+    if (is_gltf_path(path) && options.defines.empty()) return import_gltf_file(path, {options.camera, options.files});
     if (!options.defines.empty())
         throw SceneError(fmt::format("{}: -D {}=...: defines only apply to Mitsuba XML scenes", path,
                                      options.defines.begin()->first));

@@ -24,6 +24,8 @@ struct MitsubaOptions {
     // Every file the scene names (meshes, bitmaps, envmaps) is checked or read through this
     // gate; null: FileGate::unconfined(). The result carries it on to Scene::build.
     std::shared_ptr<const FileGate> files;
+    // glTF scenes only (load_scene_file): the camera to render, by name; empty = the first.
+    std::string camera;
 };
 
 SceneDesc import_mitsuba_file(const std::string& path, const MitsubaOptions& options = {});
@@ -33,8 +35,9 @@ SceneDesc import_mitsuba_string(const std::string& xml, const std::string& virtu
 
 // True for a path ending in .xml (case-insensitive).
 bool is_mitsuba_path(const std::string& path);
-// A scene in either format: Mitsuba XML for .xml (with `options`), YAML v1 otherwise (a define
-// given for a YAML scene is an error, since it would be silently ignored).
+// A scene in any format: Mitsuba XML for .xml (with `options`), glTF for .gltf/.glb (with
+// options.camera), YAML v1 otherwise (a define given for a non-XML scene, or a camera for a
+// non-glTF one, is an error, since it would be silently ignored).
 SceneDesc load_scene_file(const std::string& path, const MitsubaOptions& options = {});
 
 }  // namespace omega

@@ -14,6 +14,8 @@
 using namespace omega;
 using omega::test::scene_error_of;
 using omega::test::TempDir;
+using omega::test::all_warnings;
+using omega::test::has_warning;
 
 namespace {
 
@@ -26,16 +28,6 @@ SceneDesc import(const std::string& body, const MitsubaOptions& opt = {}) {
 }
 std::string import_error(const std::string& body) {
     return scene_error_of([&] { import(body); });
-}
-bool has_warning(const SceneDesc& d, const std::string& part) {
-    for (const auto& w : d.warnings)
-        if (w.find(part) != std::string::npos) return true;
-    return false;
-}
-std::string all_warnings(const SceneDesc& d) {
-    std::string s;
-    for (const auto& w : d.warnings) s += w + "\n";
-    return s;
 }
 
 void expect_mat(const Mat4& a, const std::array<double, 16>& b, double eps = 0) {

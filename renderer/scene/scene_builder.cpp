@@ -132,7 +132,7 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
             switch (sd.type) {
                 case ShapeType::Mesh:
                     sh.mesh = load_mesh_file(gate, sd.file, sd.file_loc.file.empty() ? sd.loc : sd.file_loc,
-                                             MeshFileOptions{sd.flip_tex_coords, sd.written, cancelled, {}});
+                                             MeshFileOptions{sd.flip_tex_coords, sd.written, cancelled, {}, sd.mesh_parts});
                     break;
                 case ShapeType::Rectangle: sh.mesh = make_rectangle(); break;
                 case ShapeType::Cube: sh.mesh = make_cube(); break;

@@ -127,6 +127,10 @@ struct ShapeDesc {
     bool face_normals = false;       // mesh: ignore the file's vertex normals
     bool drop_degenerate = true;     // mesh: skip zero-area triangles (with a warning) instead of failing
     bool flip_tex_coords = true;     // mesh: v' = 1 - v (Mitsuba's default for OBJ and PLY)
+    // mesh: only these of the file's meshes, as Assimp numbers them (glTF: each primitive of each
+    // mesh in order), wherever the file's nodes place them; empty = all. The glTF importer gives
+    // each material its own shape this way while the geometry stays in the file.
+    std::vector<int> mesh_parts;
     SourceLoc loc;
     std::string written;  // mesh: the file as the scene wrote it, for messages
     SourceLoc file_loc;   // mesh: of the file value itself

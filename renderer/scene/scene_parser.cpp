@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <climits>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -500,7 +501,10 @@ ShapeDesc parse_shape(const ParamValue& item, size_t index, ShapeCtx& ctx) {
         s.face_normals = b.get_bool("face_normals", false);
         s.drop_degenerate = b.get_bool("drop_degenerate", true);
         s.flip_tex_coords = b.get_bool("flip_tex_coords", true);
+        if (auto v = b.get("meshes"))
+            for (const ParamValue& e : v->as_list()) s.mesh_parts.push_back(int(e.as_int(0, INT_MAX)));
     } else {
+        reject(b, "meshes", "by this shape type (only mesh)");
         reject(b, "file", "by this shape type (only mesh)");
         reject(b, "face_normals", "by this shape type (only mesh)");
         reject(b, "drop_degenerate", "by this shape type (only mesh)");

@@ -186,6 +186,7 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
             if (sh.face_normals) o += "    face_normals: true\n";
             if (!sh.flip_tex_coords) o += "    flip_tex_coords: false\n";
             if (!sh.drop_degenerate) o += "    drop_degenerate: false\n";
+            if (!sh.mesh_parts.empty()) o += fmt::format("    meshes: [{}]\n", fmt::join(sh.mesh_parts, ", "));
         }
         if (sh.material != implicit) o += fmt::format("    material: {}\n", q(sh.material));
         if (sh.flip_normals) o += "    flip_normals: true\n";

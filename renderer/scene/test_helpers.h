@@ -7,6 +7,7 @@
 #include <random>
 #include <string>
 
+#include "scene/scene_desc.h"
 #include "scene/scene_error.h"
 
 namespace omega::test {
@@ -43,6 +44,18 @@ std::string scene_error_of(F&& f) {
         return e.what();
     }
     return "(no SceneError)";
+}
+
+// Whether some warning of `d` contains `part`; all of them, one a line, for failure messages.
+inline bool has_warning(const SceneDesc& d, const std::string& part) {
+    for (const auto& w : d.warnings)
+        if (w.find(part) != std::string::npos) return true;
+    return false;
+}
+inline std::string all_warnings(const SceneDesc& d) {
+    std::string s;
+    for (const auto& w : d.warnings) s += w + "\n";
+    return s;
 }
 
 }  // namespace omega::test

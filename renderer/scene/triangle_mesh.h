@@ -42,6 +42,9 @@ struct MeshFileOptions {
     // Called with the absolute path of every file read, the mesh file first (the client's
     // asset scan learns an OBJ's mtllib or a glTF's buffers this way).
     std::function<void(const std::string&)> on_read;
+    // Only these of the file's meshes (Assimp's indices); empty = all. An index the file lacks
+    // is an error naming it.
+    std::vector<int> parts;
 };
 
 // Loads OBJ, PLY or glTF through Assimp (all meshes in the file merged, triangulated), with the

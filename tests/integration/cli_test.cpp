@@ -11,28 +11,14 @@
 #include <string>
 
 #include "film/film.h"
+#include "run_omega.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CmdResult {
-    int code = -1;
-    std::string output;  // stdout and stderr
-};
-
-CmdResult run(const std::string& args) {
-    std::string cmd = std::string(OMEGA_BIN) + " " + args + " 2>&1";
-    CmdResult r;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    int status = pclose(p);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using CmdResult = omega::test::OmegaResult;
+CmdResult run(const std::string& args) { return omega::test::run_omega(args); }
 
 class CliTest : public ::testing::Test {
 protected:

@@ -9,28 +9,14 @@
 #include <string>
 
 #include "film/film.h"
+#include "run_omega.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-    int code = -1;
-    std::string output;  // stdout and stderr
-};
-
-Result run_omega(const std::string& args) {
-    std::string cmd = std::string(OMEGA_BIN) + " " + args + " 2>&1";
-    Result r;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    int status = pclose(p);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using Result = omega::test::OmegaResult;
+using omega::test::run_omega;
 
 // A small lit box in Mitsuba 3 XML, with variables.
 const char* kXml = R"(<scene version="3.0.0">
