@@ -66,11 +66,10 @@ constexpr uint32_t connect_sensor(int s) { return s >= 0 && s < kMaxDepth ? kCon
 namespace sobol {
 
 constexpr uint32_t reverse_bits(uint32_t x) {
+    x = __builtin_bswap32(x);
     x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
     x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
-    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
-    return (x >> 16) | (x << 16);
+    return ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
 }
 
 // A random permutation of 32-bit words in which bit j changes only as a function of bits below j
@@ -89,12 +88,30 @@ constexpr uint32_t owen(uint32_t x, uint32_t seed) { return reverse_bits(laine_k
 
 // Sobol' dimension 0 (van der Corput) and 1 (primitive polynomial x + 1), 0.32 fixed point.
 constexpr uint32_t dim0(uint32_t i) { return reverse_bits(i); }
-constexpr uint32_t dim1(uint32_t i) {
+// Dimension 1 by its generator matrix, column j = v_j (v_0 = 2^31, v_{j+1} = v_j ^ v_j >> 1),
+// one bit of the index at a time: the reference for the table below.
+constexpr uint32_t dim1_by_bits(uint32_t i) {
     uint32_t r = 0;
     for (uint32_t v = 1u << 31; i; i >>= 1, v ^= v >> 1)
         if (i & 1u) r ^= v;
     return r;
 }
+// reverse_bits(dim1(i)) a byte of the index at a time (4 KiB): the shuffled indices have all 32
+// bits set at random, so the bit loop's 32 unpredictable branches would cost more than the rest
+// of a draw; bit-reversed, the value goes straight into the scramble (see owen()).
+struct Dim1Table {
+    uint32_t t[4][256];
+    constexpr Dim1Table() : t{} {
+        for (uint32_t k = 0; k < 4; ++k)
+            for (uint32_t b = 0; b < 256; ++b) t[k][b] = reverse_bits(dim1_by_bits(b << (8 * k)));
+    }
+};
+inline constexpr Dim1Table kDim1Reversed{};
+constexpr uint32_t dim1_reversed(uint32_t i) {
+    const auto& t = kDim1Reversed.t;
+    return t[0][i & 0xff] ^ t[1][(i >> 8) & 0xff] ^ t[2][(i >> 16) & 0xff] ^ t[3][i >> 24];
+}
+constexpr uint32_t dim1(uint32_t i) { return reverse_bits(dim1_reversed(i)); }
 
 // [0, 1): the top 24 bits, so a float never rounds up to 1.
 constexpr float to_unit(uint32_t x) { return float(x >> 8) * 0x1p-24f; }
@@ -112,7 +129,7 @@ public:
         // every block of 2^32 samples is a fresh randomisation (still unbiased).
         Sampler s(Rng::for_sample(seed ^ 0x50b01f5eedULL, stream, index));
         s.type_ = SamplerType::Sobol;
-        s.index_ = uint32_t(index);
+        s.index_reversed_ = sobol::reverse_bits(uint32_t(index));
         s.key_ = hash3(seed, stream, index >> 32);
         return s;
     }
@@ -122,12 +139,15 @@ public:
     // The next draw uses dimension d (a dims:: value). The independent sampler ignores it.
     void start_dimension(uint32_t d) { dim_ = d; }
 
+    // Written out from owen() and dim0/dim1 with the reversals that cancel removed:
+    //   i' = owen(i, a) = rev(LK_a(rev(i)));  x = owen(dim0(i'), b) = rev(LK_b(i'));
+    //   y = owen(dim1(i'), c) = rev(LK_c(rev(dim1(i')))). sampler_test checks them against owen().
     float next_1d() {
         if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) return rng_.next_1d();
         const uint64_t h = mix64(key_ ^ (uint64_t(dim_) * 0x9e3779b97f4a7c15ULL));
         ++dim_;
-        const uint32_t i = sobol::owen(index_, uint32_t(h));  // the shuffle: see the header note
-        return sobol::to_unit(sobol::owen(sobol::dim0(i), uint32_t(h >> 32)));
+        const uint32_t i = shuffled(uint32_t(h));
+        return sobol::to_unit(sobol::reverse_bits(sobol::laine_karras(i, uint32_t(h >> 32))));
     }
 
     Vec2 next_2d() {
@@ -136,16 +156,22 @@ public:
             return {a, rng_.next_1d()};
         }
         const uint64_t h = mix64(key_ ^ (uint64_t(dim_) * 0x9e3779b97f4a7c15ULL));
-        const uint64_t h2 = mix64(h ^ 0xd1b54a32d192ed03ULL);
+        // A third seed from the same hash by one more multiply: the scrambles only need distinct,
+        // well-mixed seeds, and a full mix per coordinate showed in the render time.
+        const uint32_t c = uint32_t(((h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ULL) >> 32);
         dim_ += 2;
-        const uint32_t i = sobol::owen(index_, uint32_t(h));
-        return {sobol::to_unit(sobol::owen(sobol::dim0(i), uint32_t(h >> 32))),
-                sobol::to_unit(sobol::owen(sobol::dim1(i), uint32_t(h2)))};
+        const uint32_t i = shuffled(uint32_t(h));
+        return {sobol::to_unit(sobol::reverse_bits(sobol::laine_karras(i, uint32_t(h >> 32)))),
+                sobol::to_unit(sobol::reverse_bits(sobol::laine_karras(sobol::dim1_reversed(i), c)))};
     }
 
 private:
+    uint32_t shuffled(uint32_t seed) const {
+        return sobol::reverse_bits(sobol::laine_karras(index_reversed_, seed));  // = owen(index, seed)
+    }
+
     SamplerType type_;
-    uint32_t index_ = 0;  // sobol: the sample index modulo 2^32
+    uint32_t index_reversed_ = 0;  // sobol: the sample index modulo 2^32, bit-reversed
     uint32_t dim_ = 0;    // sobol: the dimension of the next draw
     uint64_t key_ = 0;    // sobol: hash of (seed, stream, index / 2^32)
     Rng rng_;             // independent; sobol past the dimension layout

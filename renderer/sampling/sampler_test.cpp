@@ -128,6 +128,22 @@ TEST(SobolSampler, DimensionsAreIndependent) {
         }
 }
 
+TEST(SobolSampler, FastPathEqualsThePlainFormulas) {
+    // next_1d/next_2d cancel bit reversals and use a table for dimension 1; the plain
+    // composition i' = owen(i), x = owen(dim0(i')), y = owen(dim1(i')) must give the same bits.
+    for (uint32_t i = 0; i < 4096; i += 7) EXPECT_EQ(sobol::dim1(i * 2654435761u), sobol::dim1_by_bits(i * 2654435761u));
+    for (uint64_t index : {0ull, 1ull, 77ull, 1000003ull, (1ull << 32) + 5})
+        for (uint32_t dim : {dims::kFilm, dims::kLens, kDeepPair}) {
+            const uint64_t h = mix64(hash3(8, 21, index >> 32) ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ULL));
+            const uint32_t c = uint32_t(((h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ULL) >> 32);
+            const uint32_t i = sobol::owen(uint32_t(index), uint32_t(h));
+            Vec2 u = pair_at(8, 21, index, dim);
+            EXPECT_EQ(u.x, sobol::to_unit(sobol::owen(sobol::dim0(i), uint32_t(h >> 32))));
+            EXPECT_EQ(u.y, sobol::to_unit(sobol::owen(sobol::dim1(i), c)));
+            EXPECT_EQ(one_at(8, 21, index, dim), u.x);  // a 1D draw is the pair's first coordinate
+        }
+}
+
 TEST(SobolSampler, Deterministic) {
     // A value depends only on (seed, pixel, index, dimension): not on the draws before it.
     Sampler s = Sampler::make(SamplerType::Sobol, 4, 99, 17);
