@@ -225,6 +225,8 @@ void add_converge_command(CLI::App& app, ConvergeArgs& a) {
                     "Reference image (EXR or anything OIIO reads); an integer multiple of the film size is "
                     "filtered down with the film's filter. Without it, a long path-traced reference is rendered first");
     cmd->add_option("--integrators", a.integrators, "Comma-separated: path, bdpt, light")->delimiter(',');
+    cmd->add_option("--sampler", a.sampler, "sobol | independent for the runs (overrides the scene's sampler)")
+        ->check(CLI::IsMember({"sobol", "independent"}));
     cmd->add_option("--budget", a.budget_s, "Longest render, seconds (checkpoints at 1, 2, 4, ... budget)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--runs", a.runs, "Independent runs (seeds) per integrator")->check(CLI::Range(1, 1000));
@@ -340,6 +342,7 @@ int run_converge(const ConvergeArgs& a) {
         meta.time_s = r.elapsed_s;
         meta.integrator = "path";
         meta.seed = rs.seed;
+        meta.attributes["omega.sampler"] = sampler_name(rs.integrator.sampler);
         write_exr(path, s.film(), meta);
         ref_note = fmt::format("{} (path tracer, {} spp in {:.1f} s)", path, r.spp, r.elapsed_s);
         fmt::print("reference: {}\n", ref_note);
@@ -357,6 +360,8 @@ int run_converge(const ConvergeArgs& a) {
     for (const std::string& name : a.integrators) {
         IntegratorDesc id = desc.integrator;
         id.type = name == "bdpt" ? IntegratorType::Bdpt : name == "light" ? IntegratorType::Light : IntegratorType::Path;
+        if (auto s = sampler_from_name(a.sampler)) id.sampler = *s;
+        fmt::print("{}: sampler {}\n", name, sampler_name(id.sampler));
         std::vector<Sample> samples;
         bool ok = true;
         for (int run = 0; run < a.runs && ok; ++run) {

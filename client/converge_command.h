@@ -15,6 +15,7 @@ struct ConvergeArgs {
     std::string scene;
     std::string reference;
     std::vector<std::string> integrators{"path"};
+    std::string sampler;  // sobol | independent for the runs; empty: the scene's
     double budget_s = 60;
     int runs = 3;
     std::string out_dir;

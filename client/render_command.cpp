@@ -55,6 +55,8 @@ void add_render_command(CLI::App& app, RenderArgs& a) {
     err->excludes(samples);
     cmd->add_option("--integrator", a.integrator, "path | light | bdpt (overrides the scene)")
         ->check(CLI::IsMember({"path", "light", "bdpt"}));
+    cmd->add_option("--sampler", a.sampler, "sobol | independent (overrides the scene's sampler; default sobol)")
+        ->check(CLI::IsMember({"sobol", "independent"}));
     cmd->add_option("--threads", a.threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
     cmd->add_option("--seed", a.seed, "Random seed (default 0)");
     cmd->add_option("--report", a.report_csv, "Write one CSV row per pass to this file");
@@ -90,6 +92,7 @@ int run_render(const RenderArgs& a) {
         if (a.integrator == "path") desc.integrator.type = IntegratorType::Path;
         if (a.integrator == "light") desc.integrator.type = IntegratorType::Light;
         if (a.integrator == "bdpt") desc.integrator.type = IntegratorType::Bdpt;
+        if (auto s = sampler_from_name(a.sampler)) desc.integrator.sampler = *s;
         scene = Scene::build(desc);
     } catch (const SceneError& e) {
         fmt::print(stderr, "omega: {}\n", e.what());
@@ -171,13 +174,15 @@ int run_render(const RenderArgs& a) {
     meta.time_s = last.elapsed_s;
     meta.integrator = integrator_name(desc.integrator.type);
     meta.seed = a.seed;
+    meta.attributes["omega.sampler"] = sampler_name(desc.integrator.sampler);
     meta.nonfinite = last.nonfinite;
     meta.warnings = desc.warnings;
     meta.rel_error = last.error.mean_rel_error;
     if (const StrategyImages* si = session->strategy_images()) meta.layers = si->layers(last.spp);
     try {
         if (range) {
-            PartInfo part{{{range->begin, last.spp}}, scene_hash, a.seed, meta.integrator};
+            PartInfo part{{{range->begin, last.spp}}, scene_hash, a.seed, meta.integrator,
+                          sampler_name(desc.integrator.sampler)};
             write_partial_exr(out, session->film(), meta, part);
         } else {
             write_exr(out, session->film(), meta);

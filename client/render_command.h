@@ -15,6 +15,7 @@ struct RenderArgs {
     std::optional<double> time_s;
     std::optional<double> target_error;
     std::string integrator;
+    std::string sampler;  // sobol | independent; empty: the scene's
     int threads = 0;
     uint64_t seed = 0;
     std::string report_csv;

@@ -37,6 +37,7 @@ SubmitResult submit_scene(Connection& c, const ScannedScene& scene, const JobSpe
     s.halt = spec.halt;
     s.seed = spec.seed;
     s.integrator = spec.integrator;
+    s.sampler = spec.sampler;
     s.assets = scene.refs();
     s.scene = scene.yaml;
 
@@ -89,6 +90,8 @@ void add_submit_command(CLI::App& app, SubmitArgs& a) {
     cmd->add_option("--seed", a.seed, "Random seed (default 0)");
     cmd->add_option("--integrator", a.integrator, "path | light | bdpt (overrides the scene)")
         ->check(CLI::IsMember({"path", "light", "bdpt"}));
+    cmd->add_option("--sampler", a.sampler, "sobol | independent (overrides the scene's sampler)")
+        ->check(CLI::IsMember({"sobol", "independent"}));
     cmd->add_flag("-q,--quiet", a.quiet, "Print only the job id");
 }
 
@@ -102,6 +105,7 @@ int run_submit(const SubmitArgs& a) {
         spec.halt = proto::Halt{a.spp, a.time_s, a.target_error};
         spec.seed = a.seed;
         if (!a.integrator.empty()) spec.integrator = a.integrator;
+        if (!a.sampler.empty()) spec.sampler = a.sampler;
         Connection c = connect_to(a.host);
         SubmitResult r = submit_scene(c, scene, spec);
         c.close();

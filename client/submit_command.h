@@ -15,6 +15,7 @@ struct JobSpec {  // what a submit asks for, beside the scene
     protocol::Halt halt;  // empty: the scene's own
     uint64_t seed = 0;
     std::optional<std::string> integrator;
+    std::optional<std::string> sampler;  // sobol | independent; none: the scene's
 };
 
 struct SubmitResult {
@@ -36,6 +37,7 @@ struct SubmitArgs {
     std::optional<double> target_error;
     uint64_t seed = 0;
     std::string integrator;
+    std::string sampler;
     bool quiet = false;
 };
 

@@ -72,7 +72,7 @@ std::shared_ptr<const FileGate> job_gate(const JobPaths& p, const std::vector<st
 }
 
 SceneDesc load_job_scene(const JobPaths& p, const std::string& job_name, const std::string& integrator,
-                         const std::vector<std::string>& allowed_roots) {
+                         const std::string& sampler, const std::vector<std::string>& allowed_roots) {
   const std::string files = p.files();
   const std::string virt = files + "/" + scene_file_name(job_name);
   std::string yaml = read_file(p.scene());
@@ -88,6 +88,8 @@ SceneDesc load_job_scene(const JobPaths& p, const std::string& job_name, const s
   if (integrator == "bdpt") desc.integrator.type = IntegratorType::Bdpt;
   if (!integrator.empty() && integrator != "path" && integrator != "light" && integrator != "bdpt")
     throw SceneError(shown + ":1: integrator: unknown integrator '" + integrator + "'");
+  if (auto s = sampler_from_name(sampler)) desc.integrator.sampler = *s;
+  else if (!sampler.empty()) throw SceneError(shown + ":1: sampler: unknown sampler '" + sampler + "' (sobol, independent)");
   return desc;
 }
 

@@ -29,12 +29,13 @@ std::string scene_file_name(const std::string& job_name);
 // directory: config validation keeps allowed_roots apart from it).
 std::shared_ptr<const FileGate> job_gate(const JobPaths& p, const std::vector<std::string>& allowed_roots);
 
-// Parses the job's scene through job_gate() and applies the integrator override (empty: none).
+// Parses the job's scene through job_gate() and applies the integrator and sampler overrides
+// (empty: none).
 // Every file the scene names must be a regular file inside files/ or under one of
 // allowed_roots, else SceneError; the result carries the gate, so Scene::build reads through it
 // too. Messages read "NAME.yaml:LINE: key: what" (the job directory is not shown).
 SceneDesc load_job_scene(const JobPaths& p, const std::string& job_name, const std::string& integrator,
-                         const std::vector<std::string>& allowed_roots);
+                         const std::string& sampler, const std::vector<std::string>& allowed_roots);
 
 // `msg` as a client may see it: every absolute path into the state directory is cut down to
 // what the scene named ("STATE/jobs/7/files/meshes/a.obj" -> "meshes/a.obj", likewise for

@@ -38,11 +38,11 @@ TEST(JobScene, ScenesReadOnlyTheirFilesAndAllowedRoots) {
     std::ofstream(jp.scene()) << "omega: 1\nmaterials:\n  m: {type: diffuse}\nshapes:\n  - {type: mesh, material: m, file: '" + file + "'}\n";
   };
   scene("m.obj");
-  EXPECT_NO_THROW(load_job_scene(jp, "j", "", {}));
+  EXPECT_NO_THROW(load_job_scene(jp, "j", "", "", {}));
   for (const std::string& bad : std::vector<std::string>{"../../4/result.exr", (dir / "state/jobs/4/result.exr").string(), "/etc/hostname"}) {
     scene(bad);
     try {
-      load_job_scene(jp, "j", "", {});
+      load_job_scene(jp, "j", "", "", {});
       ADD_FAILURE() << bad;
     } catch (const SceneError& e) {
       EXPECT_EQ(std::string(e.what()), "j.yaml:5: shapes[0].file: '" + bad + "' is not a submitted asset or a regular file under an allowed root");

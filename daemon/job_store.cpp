@@ -39,7 +39,7 @@ class Stmt {
 
 const char* kColumns =
     "id, name, owner, priority, state, halt_spp, halt_time, halt_error, seed, integrator, "
-    "pass, spp, elapsed_s, rel_error, samples_per_s, message";
+    "pass, spp, elapsed_s, rel_error, samples_per_s, message, sampler";
 
 std::optional<std::int64_t> opt_int(sqlite3_stmt* s, int i) {
   if (sqlite3_column_type(s, i) == SQLITE_NULL) return std::nullopt;
@@ -96,6 +96,14 @@ JobStore::JobStore(const std::string& path) : path_(path) {
       " rel_error REAL, samples_per_s REAL NOT NULL DEFAULT 0, message TEXT NOT NULL DEFAULT '',"
       " created TEXT NOT NULL DEFAULT (datetime('now')))");
   exec("CREATE INDEX IF NOT EXISTS jobs_queue ON jobs(state, priority DESC, id)");
+  // Stores made before the sampler override existed lack its column; their jobs keep the
+  // scene's sampler (empty override).
+  bool has_sampler = false;
+  {
+    Stmt info(db_, "SELECT name FROM pragma_table_info('jobs')", path_);
+    while (info.step()) has_sampler |= text(info.get(), 0) == "sampler";
+  }
+  if (!has_sampler) exec("ALTER TABLE jobs ADD COLUMN sampler TEXT NOT NULL DEFAULT ''");
 }
 
 JobStore::~JobStore() { sqlite3_close(db_); }
@@ -113,12 +121,12 @@ std::uint64_t JobStore::insert(const JobRecord& r, const std::function<void(std:
   exec("BEGIN IMMEDIATE");
   try {
     Stmt s(db_,
-           "INSERT INTO jobs (name, owner, priority, state, halt_spp, halt_time, halt_error, seed, integrator)"
-           " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+           "INSERT INTO jobs (name, owner, priority, state, halt_spp, halt_time, halt_error, seed, integrator, sampler)"
+           " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
            path_);
     s.bind(1, r.name).bind(2, r.owner).bind(3, r.priority).bind(4, std::string(protocol::to_string(r.state)));
     s.bind_opt(5, r.halt.spp).bind_opt(6, r.halt.time_s).bind_opt(7, r.halt.target_error);
-    s.bind(8, static_cast<std::int64_t>(r.seed)).bind(9, r.integrator);
+    s.bind(8, static_cast<std::int64_t>(r.seed)).bind(9, r.integrator).bind(10, r.sampler);
     s.step();
     auto id = static_cast<std::uint64_t>(sqlite3_last_insert_rowid(db_));
     if (before_commit) before_commit(id);
@@ -153,6 +161,7 @@ std::vector<JobRecord> JobStore::select(const std::string& where_order, std::opt
     r.progress.rel_error = opt_double(q, 13);
     r.progress.samples_per_s = sqlite3_column_double(q, 14);
     r.message = text(q, 15);
+    r.sampler = text(q, 16);
     out.push_back(std::move(r));
   }
   return out;

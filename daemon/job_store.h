@@ -23,6 +23,7 @@ struct JobRecord {
   protocol::Halt halt;
   std::uint64_t seed = 0;
   std::string integrator;  // empty: the scene's
+  std::string sampler;     // empty: the scene's
   protocol::ProgressInfo progress;
   std::string message;  // why it failed
 

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sqlite3.h>
+
 #include <filesystem>
 #include <stdexcept>
 
@@ -64,6 +66,39 @@ TEST(JobStore, AFailingBeforeCommitRollsTheInsertBack) {
   EXPECT_EQ(*s.get(id)->progress.rel_error, 0.5);
   s.remove(id);
   EXPECT_FALSE(s.get(id));
+}
+
+TEST(JobStore, SamplerOverrideIsKeptAndOldStoresGainTheColumn) {
+  TempDir t;
+  std::string db = (t.p / "jobs.sqlite").string();
+  {
+    // A store written before the sampler column existed, with one queued job.
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(db.c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw,
+                           "CREATE TABLE jobs (id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL, owner TEXT NOT "
+                           "NULL, priority INTEGER NOT NULL, state TEXT NOT NULL, halt_spp INTEGER, halt_time REAL, "
+                           "halt_error REAL, seed INTEGER NOT NULL, integrator TEXT NOT NULL, pass INTEGER NOT NULL "
+                           "DEFAULT 0, spp INTEGER NOT NULL DEFAULT 0, elapsed_s REAL NOT NULL DEFAULT 0, rel_error "
+                           "REAL, samples_per_s REAL NOT NULL DEFAULT 0, message TEXT NOT NULL DEFAULT '', created TEXT "
+                           "NOT NULL DEFAULT (datetime('now')));"
+                           "INSERT INTO jobs (name, owner, priority, state, seed, integrator) "
+                           "VALUES ('old', '1000', 0, 'queued', 3, 'bdpt');",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(raw);
+  }
+  {
+    JobStore s(db);
+    EXPECT_EQ(s.get(1)->sampler, "");  // the scene's
+    EXPECT_EQ(s.get(1)->integrator, "bdpt");
+    JobRecord r = rec("new", 0);
+    r.sampler = "independent";
+    s.insert(r, {});
+  }
+  JobStore s(db);
+  EXPECT_EQ(s.get(2)->sampler, "independent");
+  EXPECT_EQ(s.get(1)->sampler, "");
 }
 
 }  // namespace

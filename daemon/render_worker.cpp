@@ -108,7 +108,7 @@ void RenderWorker::run() {
   std::shared_ptr<const FilmSnapshot> last;
   bool last_on_disk = false;
   try {
-    SceneDesc desc = load_job_scene(spec_.paths, spec_.name, spec_.integrator, spec_.allowed_roots);
+    SceneDesc desc = load_job_scene(spec_.paths, spec_.name, spec_.integrator, spec_.sampler, spec_.allowed_roots);
     // Any stop, drain included, abandons a build: nothing of it is worth keeping, and a slow
     // build must not hold up a cancel or a shutdown.
     std::unique_ptr<Scene> scene = Scene::build(desc, [this] { return stop_requested() != StopKind::none; });
@@ -259,6 +259,7 @@ void RenderWorker::run() {
       m.time_s = meta.elapsed_s;
       m.integrator = integrator_name(desc.integrator.type);
       m.seed = spec_.seed;
+      m.attributes["omega.sampler"] = sampler_name(desc.integrator.sampler);
       m.nonfinite = meta.nonfinite;
       m.warnings = desc.warnings;
       m.rel_error = meta.rel_error.value_or(0);

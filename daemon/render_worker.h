@@ -63,6 +63,7 @@ struct WorkerSpec {
   JobPaths paths;
   std::string name;
   std::string integrator;
+  std::string sampler;  // empty: the scene's
   protocol::Halt halt;
   std::uint64_t seed = 0;
   int threads = 0;

@@ -39,7 +39,7 @@ void Server::validate(Connection& c, std::uint64_t submit_id) {
       fs::create_directories(jp.files());
       write_file_atomic(jp.scene(), s.scene);
       for (const auto& a : s.assets) assets_->materialize(a.sha256, a.size, jp.files() + "/" + a.name);
-      SceneDesc desc = load_job_scene(jp, s.name, s.integrator.value_or(""), roots);
+      SceneDesc desc = load_job_scene(jp, s.name, s.integrator.value_or(""), s.sampler.value_or(""), roots);
       std::uint64_t asset_bytes = 0;
       for (const auto& a : s.assets) asset_bytes += a.size;
       check_scene_limits(limits, desc, asset_bytes, scene_file_name(s.name));  // before the costly build
@@ -106,6 +106,7 @@ void Server::on_validated(std::uint64_t conn, const protocol::Submit& s, Validat
   r.halt = v.halt;
   r.seed = s.seed;
   r.integrator = s.integrator.value_or("");
+  r.sampler = s.sampler.value_or("");
   std::uint64_t job = 0;
   try {
     job = store_->insert(r, [&](std::uint64_t id) {
@@ -175,6 +176,7 @@ void Server::start_job(const JobRecord& r) {
   spec.paths = paths(r.id);
   spec.name = r.name;
   spec.integrator = r.integrator;
+  spec.sampler = r.sampler;
   spec.halt = r.halt;
   spec.seed = r.seed;
   spec.threads = cfg_.threads;

@@ -428,7 +428,7 @@ void Server::on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job) {
         fd = *film;
       } else {
         // A checkpoint restored after a restart does not record which integrator made it.
-        SceneDesc d = load_job_scene(jp, rec.name, rec.integrator, roots);
+        SceneDesc d = load_job_scene(jp, rec.name, rec.integrator, rec.sampler, roots);
         fd = d.sensor.film;
         meta.integrator = integrator_name(d.integrator.type);
       }
@@ -480,7 +480,7 @@ void Server::on_fetch(Connection& c, std::uint64_t id, std::uint64_t job) {
         img.pass = rec.progress.pass;
         img.spp = rec.progress.spp;
       } else {
-        FilmDesc fd = film ? *film : load_job_scene(jp, rec.name, rec.integrator, roots).sensor.film;
+        FilmDesc fd = film ? *film : load_job_scene(jp, rec.name, rec.integrator, rec.sampler, roots).sensor.film;
         Film f = Film::deserialize(fd, snap->film);
         img.exr = encode_image(f, *snap);
         img.width = std::uint32_t(f.width());

@@ -111,6 +111,7 @@ struct Submit {
   Halt halt;  // empty: the scene's own spp/time/target_error
   std::uint64_t seed = 0;
   std::optional<std::string> integrator;
+  std::optional<std::string> sampler;  // "sobol" | "independent": overrides the scene's
   std::vector<AssetRef> assets;
   std::string scene;  // payload: the scene YAML
   bool operator==(const Submit&) const = default;

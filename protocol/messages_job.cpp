@@ -44,6 +44,7 @@ Frame encode(const Submit& m) {
   detail::write_halt(w, m.halt);
   w.field_u("seed", m.seed);
   if (m.integrator) w.field("integrator", *m.integrator);
+  if (m.sampler) w.field("sampler", *m.sampler);  // absent: the scene's (older clients send none)
   w.key("assets").begin_list();
   for (const AssetRef& a : m.assets)
     w.begin_map().field("name", a.name).field("sha256", a.sha256).field_u("size", a.size).end_map();
@@ -64,6 +65,9 @@ Result<Submit, DecodeError> decode<Submit>(const DecodedFrame& f) {
   m.integrator = r.opt_str("integrator", 64);
   if (r.ok() && m.integrator && !is_identifier(*m.integrator))
     r.fail(DecodeError::invalid_value, "integrator", "expected a name of [a-z0-9_]");
+  m.sampler = r.opt_str("sampler", 64);
+  if (r.ok() && m.sampler && !is_identifier(*m.sampler))
+    r.fail(DecodeError::invalid_value, "sampler", "expected a name of [a-z0-9_]");
   std::set<std::string> names;
   for (FieldReader& a : r.map_list("assets", kMaxAssets)) {
     AssetRef ref;

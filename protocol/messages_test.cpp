@@ -60,6 +60,10 @@ TEST(Messages, OptionalFieldsAbsentAndPresent) {
     ASSERT_TRUE(m.ok()) << m.message();
     EXPECT_EQ(*m, s);
   }
+  s.sampler = "independent";
+  auto with_sampler = decode<Submit>(through_decoder(encode(s)));
+  ASSERT_TRUE(with_sampler.ok()) << with_sampler.message();
+  EXPECT_EQ(*with_sampler, s);
   Done d{3, 4, JobState::failed, {}, std::string("out of memory\n\"quoted\" é")};
   auto r = decode<Done>(through_decoder(encode(d)));
   ASSERT_TRUE(r.ok());

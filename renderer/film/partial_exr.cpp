@@ -122,6 +122,7 @@ void write_partial_exr(const std::string& path, const Film& film, ExrMeta meta, 
     meta.attributes["omega.scene_hash"] = part.scene_hash;
     meta.seed = part.seed;
     meta.integrator = part.integrator;
+    meta.attributes["omega.sampler"] = part.sampler;
     write_exr(path, film, meta);
 }
 
@@ -147,6 +148,9 @@ PartialRender read_partial_exr(const std::string& path) {
     };
     out.part.scene_hash = attr("omega.scene_hash");
     out.part.integrator = attr("omega.integrator");
+    const auto sampler = img.attributes.find("omega.sampler");
+    out.part.sampler = sampler == img.attributes.end() ? "independent" : sampler->second;
+    out.meta.attributes["omega.sampler"] = out.part.sampler;
     const std::string seed = attr("omega.seed");
     if (std::from_chars(seed.data(), seed.data() + seed.size(), out.part.seed).ptr != seed.data() + seed.size())
         throw fail("omega.seed is not a number");
@@ -197,7 +201,7 @@ MergeResult merge_parts(std::vector<PartialRender> parts, bool allow_gaps) {
     const PartialRender& first = parts.front();
     auto differs = [&](const PartialRender& p, const char* what, const std::string& mine, const std::string& theirs) {
         return MergeRefused(p.path + ": " + what + " " + mine + " differs from " + first.path + "'s " + theirs +
-                            ": parts must come from the same scene, seed, integrator and film");
+                            ": parts must come from the same scene, seed, integrator, sampler and film");
     };
     for (const PartialRender& p : parts) {
         if (p.part.scene_hash != first.part.scene_hash)
@@ -206,6 +210,8 @@ MergeResult merge_parts(std::vector<PartialRender> parts, bool allow_gaps) {
             throw differs(p, "seed", std::to_string(p.part.seed), std::to_string(first.part.seed));
         if (p.part.integrator != first.part.integrator)
             throw differs(p, "integrator", p.part.integrator, first.part.integrator);
+        if (p.part.sampler != first.part.sampler)
+            throw differs(p, "sampler", p.part.sampler, first.part.sampler);
         const Rect a = p.film.crop(), b = first.film.crop();
         if (p.film.width() != first.film.width() || p.film.height() != first.film.height() || a.x0 != b.x0 ||
             a.y0 != b.y0 || a.x1 != b.x1 || a.y1 != b.y1)
@@ -254,6 +260,8 @@ MergeResult merge_parts(std::vector<PartialRender> parts, bool allow_gaps) {
     out.part.scene_hash = first.part.scene_hash;
     out.part.seed = first.part.seed;
     out.part.integrator = first.part.integrator;
+    out.part.sampler = first.part.sampler;
+    out.meta.attributes["omega.sampler"] = out.part.sampler;
     out.meta.seed = out.part.seed;
     out.meta.integrator = out.part.integrator;
     out.meta.rel_error = out.film.estimate_error().mean_rel_error;

@@ -6,7 +6,7 @@
 // - the film's double-precision accumulator state, losslessly, in 16 UINT channels
 //   (state.n.lo, state.n.hi, state.w.lo, ..., state.m2.B.hi: each 64-bit word split in two);
 // - what must agree for a merge: omega.samples (the sample ranges it holds), omega.scene_hash,
-//   omega.seed, omega.integrator, and the display and data windows.
+//   omega.seed, omega.integrator, omega.sampler, and the display and data windows.
 // A merge's output is a part as well, so merges nest (per node, then per frame).
 //
 // How exact: sample i of pixel p depends only on (seed, p, i), so the parts hold exactly the
@@ -42,6 +42,9 @@ struct PartInfo {
     std::string scene_hash;           // scene_content_hash of the scene (client/scene_hash.h)
     uint64_t seed = 0;
     std::string integrator;
+    // omega.sampler: "sobol" or "independent". Parts written before the attribute existed lack
+    // it; they were made by the independent sampler and read as such.
+    std::string sampler;
 };
 
 // Writes the film as a part: meta's channels and attributes plus the state channels and the
@@ -73,7 +76,7 @@ struct MergeResult {
 };
 
 // Merges parts in order of their first sample (so the argument order does not change a bit).
-// Refuses (MergeRefused) parts that differ in scene hash, seed, integrator or film windows,
+// Refuses (MergeRefused) parts that differ in scene hash, seed, integrator, sampler or film windows,
 // ranges that overlap, and gaps unless allow_gaps (the result then lists them in omega.gaps).
 MergeResult merge_parts(std::vector<PartialRender> parts, bool allow_gaps);
 

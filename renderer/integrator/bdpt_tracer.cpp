@@ -15,13 +15,13 @@ BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
     if (use_t0_ && md < kMaxUnboundedDepth) light_limits_.max_vertices = md + 1;
 }
 
-Rgb BdptTracer::sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
+Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
                        std::vector<StrategyContribution>* per_strategy) const {
     auto& cam = scratch.camera;
     auto& lit = scratch.light;
-    const int n_cam = camera_limits_.max_vertices > 0 ? generate_camera_subpath(scene_, ray, camera_limits_, rng, stats, cam) : 0;
+    const int n_cam = camera_limits_.max_vertices > 0 ? generate_camera_subpath(scene_, ray, camera_limits_, sampler, stats, cam) : 0;
     const int n_light = light_limits_.max_vertices > 0
-                            ? generate_light_subpath(scene_, light_limits_, rng, stats, lit, use_t0_ ? &scratch.lens : nullptr)
+                            ? generate_light_subpath(scene_, light_limits_, sampler, stats, lit, use_t0_ ? &scratch.lens : nullptr)
                             : 0;
     if (n_light == 0) lit.clear();
 
@@ -52,7 +52,7 @@ Rgb BdptTracer::sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch
             if (s >= 2 && s > n_light) continue;
             if (t == 1 && s > n_light) continue;
             if (s == 0 && cam[size_t(t - 1)].light < 0) continue;  // only a hit light can end here
-            auto c = connect(scene_, lit, cam, s, t, set_, rng, stats, scratch.connect);
+            auto c = connect(scene_, lit, cam, s, t, set_, sampler, stats, scratch.connect);
             if (!c) continue;
             Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
             Rgb weighted = unweighted * float(c->weight);

@@ -38,7 +38,7 @@ public:
     // One sample for the pixel whose camera ray is `ray`. Returns the camera-side contribution
     // (strategies t >= 2) and appends the splats (t = 1, and t = 0 for a hittable lens). If `per_strategy` is
     // given, every strategy's contribution is also recorded there.
-    Rgb sample(const Ray& ray, Rng& rng, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
+    Rgb sample(const Ray& ray, Sampler& sampler, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
                std::vector<StrategyContribution>* per_strategy = nullptr) const;
 
     const StrategySet& strategies() const { return set_; }

@@ -16,11 +16,11 @@ inline bool consistent_side(const Vec3& w_world, const Vec3& ng, float cos_shadi
 }  // namespace
 
 Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,
-                              Rng& rng, TracerStats& stats) const {
+                              Sampler& sampler, TracerStats& stats) const {
     const auto& sel = scene_.light_selection();
     if (sel.empty()) return Rgb(0.f);
-    float u_sel = rng.next_1d();
-    Vec2 u{rng.next_1d(), rng.next_1d()};
+    float u_sel = sampler.next_1d();
+    Vec2 u = sampler.next_2d();
     size_t li = sel.sample(u_sel);
     float pmf = sel.pmf(li);
     const Light& light = scene_.lights()[li];
@@ -38,7 +38,7 @@ Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const
     return f * ls->Li * (w / pdf_light_sa);
 }
 
-Rgb PathTracer::radiance(Ray ray, Rng& rng, TracerStats& stats) const {
+Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
     const int max_depth = settings_.max_depth >= 0 ? settings_.max_depth : kMaxUnboundedDepth;
     const bool nee = settings_.light_sampling;
     Rgb L(0.f), beta(1.f);
@@ -84,10 +84,15 @@ Rgb PathTracer::radiance(Ray ray, Rng& rng, TracerStats& stats) const {
         Vec3 wo_local = shading.to_local(wo);
         if (wo_local.z == 0) break;
 
-        if (nee && bsdf_has_nondelta(bsdf)) L += beta * sample_direct(hit, shading, wo_local, bsdf, rng, stats);
+        // Vertex k of the path (k edges before it) draws from its own block of dimensions.
+        if (nee && bsdf_has_nondelta(bsdf)) {
+            sampler.start_dimension(dims::camera_walk(k, dims::kDirect));
+            L += beta * sample_direct(hit, shading, wo_local, bsdf, sampler, stats);
+        }
 
-        float uc = rng.next_1d();
-        Vec2 u{rng.next_1d(), rng.next_1d()};
+        sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
+        float uc = sampler.next_1d();
+        Vec2 u = sampler.next_2d();
         auto bs = bsdf_sample(bsdf, wo_local, uc, u, TransportMode::Radiance);
         if (!bs || is_black(bs->weight)) break;
         Vec3 wi = shading.to_world(bs->wi);
@@ -105,7 +110,8 @@ Rgb PathTracer::radiance(Ray ray, Rng& rng, TracerStats& stats) const {
             // (rho^2/q)^k.
             float q = std::min(1.f, max_component(beta) * eta_scale);
             if (q < 1.f) {
-                if (!(q > 0) || rng.next_1d() >= q) break;
+                sampler.start_dimension(dims::camera_walk(k, dims::kRoulette));
+                if (!(q > 0) || sampler.next_1d() >= q) break;
                 beta /= q;
             }
         }

@@ -5,7 +5,7 @@
 // directly, 2 = direct lighting.
 #include <cstdint>
 
-#include "sampling/rng.h"
+#include "sampling/sampler.h"
 #include "scene/scene.h"
 
 namespace omega {
@@ -30,12 +30,13 @@ struct TracerStats {
 class PathTracer {
 public:
     PathTracer(const Scene& scene, const PathTracerSettings& settings) : scene_(scene), settings_(settings) {}
-    // Radiance along `ray`. Called concurrently from render threads; touches only `rng` and `stats`.
-    Rgb radiance(Ray ray, Rng& rng, TracerStats& stats) const;
+    // Radiance along `ray`. Called concurrently from render threads; touches only `sampler` and
+    // `stats`. Bounce k draws from the camera-walk block of vertex k (see sampling/sampler.h).
+    Rgb radiance(Ray ray, Sampler& sampler, TracerStats& stats) const;
 
 private:
-    Rgb sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf, Rng& rng,
-                      TracerStats& stats) const;
+    Rgb sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,
+                      Sampler& sampler, TracerStats& stats) const;
     const Scene& scene_;
     PathTracerSettings settings_;
 };

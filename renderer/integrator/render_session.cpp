@@ -109,13 +109,16 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                             for (int y = tile.y0; y < tile.y1; ++y)
                                 for (int x = tile.x0; x < tile.x1; ++x) {
                                     uint64_t pixel = uint64_t(y) * width + uint64_t(x);
-                                    Rng rng = Rng::for_sample(settings_.seed, pixel, uint64_t(i));
-                                    Vec2 u_film{rng.next_1d(), rng.next_1d()};
-                                    Vec2 u_lens{rng.next_1d(), rng.next_1d()};
+                                    Sampler sampler =
+                                        Sampler::make(settings_.integrator.sampler, settings_.seed, pixel, uint64_t(i));
+                                    sampler.start_dimension(dims::kFilm);
+                                    Vec2 u_film = sampler.next_2d();
+                                    sampler.start_dimension(dims::kLens);
+                                    Vec2 u_lens = sampler.next_2d();
                                     Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
                                     local.clear();
                                     if (per) per->clear();
-                                    Rgb L = bdpt_->sample(ray, rng, st, scratch, local, per);
+                                    Rgb L = bdpt_->sample(ray, sampler, st, scratch, local, per);
                                     ++st.samples;
                                     bool finite = is_finite(L);
                                     for (const Splat& sp : local) finite = finite && is_finite(sp.value);
@@ -177,12 +180,14 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
         for (int x = tile.x0; x < tile.x1; ++x) {
             uint64_t pixel = uint64_t(y) * width + uint64_t(x);
             for (long long i = s0; i < s1; ++i) {
-                Rng rng = Rng::for_sample(settings_.seed, pixel, uint64_t(i));
-                Vec2 u_film{rng.next_1d(), rng.next_1d()};
-                Vec2 u_lens{rng.next_1d(), rng.next_1d()};
+                Sampler sampler = Sampler::make(settings_.integrator.sampler, settings_.seed, pixel, uint64_t(i));
+                sampler.start_dimension(dims::kFilm);
+                Vec2 u_film = sampler.next_2d();
+                sampler.start_dimension(dims::kLens);
+                Vec2 u_lens = sampler.next_2d();
                 Vec2 pos = film_.sample_position(x, y, u_film);
                 Ray ray = sensor.generate_ray(pos, u_lens);
-                Rgb L = tracer_.radiance(ray, rng, stats);
+                Rgb L = tracer_.radiance(ray, sampler, stats);
                 ++stats.samples;
                 if (!is_finite(L)) {
                     ++stats.nonfinite;  // discarded: one bad sample must not poison a pixel

@@ -2,8 +2,9 @@
 // The render driver: progressive passes over tiles on a oneTBB arena.
 //
 // Lifecycle (Tungsten's): construct (prepare) -> run() (start; blocks) -> abort() from any thread.
-// Determinism: sample i of pixel p draws from Rng::for_sample(seed, p, i) and each pixel belongs
-// to exactly one tile, so the film is bit-identical for any thread count or tile order.
+// Determinism: sample i of pixel p draws from Sampler::make(sampler, seed, p, i) (its values depend
+// only on (seed, p, i, dimension)) and each pixel belongs to exactly one tile, so the film is
+// bit-identical for any thread count or tile order, and sample ranges merge exactly.
 #include <atomic>
 #include <chrono>
 #include <functional>

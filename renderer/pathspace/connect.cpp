@@ -152,7 +152,7 @@ std::optional<Connection> connect_lens(const Scene& scene, const std::vector<Pat
 
 std::optional<Connection> connect(const Scene& scene, const std::vector<PathVertex>& light,
                                   const std::vector<PathVertex>& camera, int s, int t, const StrategySet& set,
-                                  Rng& rng, TracerStats& stats, ConnectStats& cstats,
+                                  Sampler& sampler, TracerStats& stats, ConnectStats& cstats,
                                   std::vector<PathVertex>* full_path, FullPathPdfs* pdfs) {
     Connection c;
     PathVertex sampled;
@@ -175,7 +175,8 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         const PathVertex& y = light[size_t(s - 1)];
         if (!y.connectible() || y.infinite) return std::nullopt;
         const Sensor& sensor = scene.sensor();
-        auto sc = sensor.sample_wi(y.p(), {rng.next_1d(), rng.next_1d()});
+        sampler.start_dimension(dims::connect_sensor(s));
+        auto sc = sensor.sample_wi(y.p(), sampler.next_2d());
         if (!sc) return std::nullopt;
         sampled = sensor_vertex(scene, sc->p);
         Sensor::Pdf pdf = sensor.pdf_we(sc->p, -sc->wi);
@@ -205,10 +206,11 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         if (!z.connectible() || z.kind != VertexKind::Surface) return std::nullopt;
         const auto& sel = scene.light_selection();
         if (sel.empty()) return std::nullopt;
-        size_t li = sel.sample(rng.next_1d());
+        sampler.start_dimension(dims::connect_light(t));
+        size_t li = sel.sample(sampler.next_1d());
         double pmf = sel.pmf(li);
         const Light& l = scene.lights()[li];
-        auto ls = light_sample_li(scene, l, z.p(), {rng.next_1d(), rng.next_1d()});
+        auto ls = light_sample_li(scene, l, z.p(), sampler.next_2d());
         if (!ls || ls->pdf_sa <= 0 || is_black(ls->Li)) return std::nullopt;
         sampled.kind = VertexKind::Light;
         sampled.light = int(li);

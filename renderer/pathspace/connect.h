@@ -30,7 +30,7 @@ struct ConnectStats {
 // if the strategy cannot produce a path here (delta vertices, no light hit, occluded...).
 std::optional<Connection> connect(const Scene& scene, const std::vector<PathVertex>& light,
                                   const std::vector<PathVertex>& camera, int s, int t, const StrategySet& set,
-                                  Rng& rng, TracerStats& stats, ConnectStats& cstats,
+                                  Sampler& sampler, TracerStats& stats, ConnectStats& cstats,
                                   std::vector<PathVertex>* full_path = nullptr, FullPathPdfs* pdfs = nullptr);
 
 // Strategy t = 0: the light subpath light[0..lc.s) that reached the lens. The contribution is a

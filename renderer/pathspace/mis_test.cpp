@@ -68,7 +68,7 @@ Checked check_scene(const SceneDesc& desc, int samples, int max_depth) {
     ConnectStats cstats;
     const Sensor& sensor = scene->sensor();
     for (int i = 0; i < samples; ++i) {
-        Rng rng = Rng::for_sample(99, 0, uint64_t(i));
+        Sampler rng(Rng::for_sample(99, 0, uint64_t(i)));  // independent: the checks need no layout
         Vec2 film{rng.next_1d() * float(sensor.width), rng.next_1d() * float(sensor.height)};
         Ray ray = sensor.generate_ray(film, {rng.next_1d(), rng.next_1d()});
         std::vector<PathVertex> cam, lit;

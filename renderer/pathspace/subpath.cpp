@@ -71,7 +71,7 @@ void record_lens_crossing(const Scene& scene, const Ray& ray, float tmax, const 
     if (c.lens.pdf_fwd > 0 && !is_black(beta)) out.push_back(c);
 }
 
-int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const WalkLimits& lim, Rng& rng,
+int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const WalkLimits& lim, Sampler& sampler,
                 TracerStats& stats, std::vector<PathVertex>& path, std::vector<LensCrossing>* lens = nullptr) {
     while (int(path.size()) < lim.max_vertices) {
         SurfaceHit hit;
@@ -117,8 +117,14 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
 
         Vec3 wo_local = cur.shading.to_local(cur.wo);
         if (wo_local.z == 0) break;
-        float uc = rng.next_1d();
-        Vec2 u{rng.next_1d(), rng.next_1d()};
+        // Vertex j = path.size() - 1 scatters with its block of dimensions (camera or light walk).
+        const int j = int(path.size()) - 1;
+        auto block = [&](uint32_t slot) {
+            return mode == TransportMode::Radiance ? dims::camera_walk(j, slot) : dims::light_walk(j, slot);
+        };
+        sampler.start_dimension(block(dims::kScatter));
+        float uc = sampler.next_1d();
+        Vec2 u = sampler.next_2d();
         Bsdf textured;  // v.bsdf is the scene's material; textures are looked up at the hit's uv
         auto bs = bsdf_sample(resolve_bsdf(*cur.bsdf, cur.hit.uv, textured), wo_local, uc, u, mode);
         if (!bs || is_black(bs->weight)) break;
@@ -131,7 +137,8 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
         if (int(path.size()) > lim.rr_depth) {
             float q = std::min(1.f, max_component(beta));
             if (q < 1.f) {
-                if (!(q > 0) || rng.next_1d() >= q) break;
+                sampler.start_dimension(block(dims::kRoulette));
+                if (!(q > 0) || sampler.next_1d() >= q) break;
                 beta /= q;
             }
         }
@@ -203,7 +210,7 @@ double vertex_pdf_sa(const PathVertex& v, const Vec3& from, const Vec3& to) {
     return bsdf_pdf_sa(*v.bsdf, v.shading.to_local(from), v.shading.to_local(to), TransportMode::Radiance);
 }
 
-int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits& lim, Rng& rng, TracerStats& stats,
+int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits& lim, Sampler& sampler, TracerStats& stats,
                             std::vector<PathVertex>& path) {
     path.clear();
     if (lim.max_vertices <= 0) return 0;
@@ -216,7 +223,7 @@ int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits
     cam.beta = Rgb(1.f);
     path.push_back(cam);
     if (!(pdf.pos > 0) || !(pdf.dir > 0)) return 1;  // cannot happen for a ray the sensor generated
-    return random_walk(scene, ray, Rgb(1.f), TransportMode::Radiance, lim, rng, stats, path);
+    return random_walk(scene, ray, Rgb(1.f), TransportMode::Radiance, lim, sampler, stats, path);
 }
 
 PathVertex sensor_vertex(const Scene& scene, const Vec3& p) {
@@ -227,7 +234,7 @@ PathVertex sensor_vertex(const Scene& scene, const Vec3& p) {
     return v;
 }
 
-int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, TracerStats& stats,
+int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Sampler& sampler, TracerStats& stats,
                            std::vector<PathVertex>& path, std::vector<LensCrossing>* lens) {
     path.clear();
     if (lens) {
@@ -236,8 +243,10 @@ int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, 
     }
     const auto& sel = scene.light_selection();
     if (sel.empty() || lim.max_vertices <= 0) return 0;
-    float u_sel = rng.next_1d();
-    Vec2 u_pos{rng.next_1d(), rng.next_1d()}, u_dir{rng.next_1d(), rng.next_1d()};
+    sampler.start_dimension(dims::kEmit);
+    float u_sel = sampler.next_1d();
+    Vec2 u_pos = sampler.next_2d();
+    Vec2 u_dir = sampler.next_2d();
     size_t li = sel.sample(u_sel);
     double pmf = sel.pmf(li);
     const Light& light = scene.lights()[li];
@@ -256,7 +265,7 @@ int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, 
     double cos0 = std::holds_alternative<AreaLight>(light) ? absdot(e->origin.ng, e->ray.d) : 1.0;
     Rgb beta = e->Le * float(cos0 / (pmf * e->pdf_pos * e->pdf_dir));
     if (!is_finite(beta) || is_black(beta)) return 1;
-    return random_walk(scene, e->ray, beta, TransportMode::Importance, lim, rng, stats, path, lens);
+    return random_walk(scene, e->ray, beta, TransportMode::Importance, lim, sampler, stats, path, lens);
 }
 
 }  // namespace omega

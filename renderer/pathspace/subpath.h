@@ -4,7 +4,7 @@
 
 #include "integrator/path_tracer.h"
 #include "pathspace/vertex.h"
-#include "sampling/rng.h"
+#include "sampling/sampler.h"
 #include "scene/scene.h"
 
 namespace omega {
@@ -15,8 +15,9 @@ struct WalkLimits {
 };
 
 // path[0] is the sensor vertex for `ray` (a camera ray from Sensor::generate_ray, whose
-// throughput is 1 by importance sampling). Returns the number of vertices.
-int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits& lim, Rng& rng, TracerStats& stats,
+// throughput is 1 by importance sampling). Returns the number of vertices. Vertex j scatters
+// with the dimensions dims::camera_walk(j, ...), as the path tracer's bounce j does.
+int generate_camera_subpath(const Scene& scene, const Ray& ray, const WalkLimits& lim, Sampler& sampler, TracerStats& stats,
                             std::vector<PathVertex>& path);
 
 // Strategy t = 0: an edge of a light subpath that reaches a lens of finite aperture. The full
@@ -33,7 +34,7 @@ struct LensCrossing {
 // path[0] is a light vertex chosen by power. Returns the number of vertices (0 if the light
 // emitted nothing along the sampled ray). If `lens` is given and the sensor's lens can be hit,
 // every edge that crosses it is appended there (the walk itself goes on unchanged).
-int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Rng& rng, TracerStats& stats,
+int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Sampler& sampler, TracerStats& stats,
                            std::vector<PathVertex>& path, std::vector<LensCrossing>* lens = nullptr);
 
 // The sensor vertex at world point p (camera subpaths, t = 1 and t = 0): a thin lens of finite

@@ -13,6 +13,7 @@
 #include "bsdf/bsdf.h"
 #include "math/transform.h"
 #include "math/vec.h"
+#include "sampling/sampler_type.h"
 #include "texture/texture_types.h"
 
 namespace omega {
@@ -46,6 +47,9 @@ struct IntegratorDesc {
     // per-sample variance then has closed forms (tests/stability/furnace_variance_test.cpp).
     // Other integrators reject false.
     bool light_sampling = true;
+    // Scene key `sampler: {type: sobol | independent}` (top level, beside `integrator`); it lives
+    // here so that every place that hands an IntegratorDesc to a render carries it along.
+    SamplerType sampler = SamplerType::Sobol;
 };
 
 enum class FilterType { Box, Tent, Gaussian };

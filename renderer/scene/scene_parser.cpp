@@ -598,6 +598,11 @@ SceneDesc parse_root(const YAML::Node& root, const std::string& file, const fs::
         ver->fail(fmt::format("unsupported scene format version {} (this build reads version 1)", version));
 
     if (auto b = top.opt_bag("integrator")) parse_integrator(*b, desc.integrator);
+    if (auto b = top.opt_bag("sampler")) {
+        desc.integrator.sampler = b->get_enum<SamplerType>(
+            "type", {{"sobol", SamplerType::Sobol}, {"independent", SamplerType::Independent}}, desc.integrator.sampler);
+        b->check_unused();
+    }
     if (auto b = top.opt_bag("sensor")) parse_sensor(*b, desc.sensor);
     else desc.sensor.film.crop = {0, 0, desc.sensor.film.width, desc.sensor.film.height};
 

@@ -406,3 +406,14 @@ TEST(SceneParser, DocumentationExampleParses) {
     EXPECT_EQ(d.lights.size(), 1u);
     EXPECT_TRUE(d.warnings.empty()) << d.warnings[0];
 }
+
+TEST(SceneParser, SamplerKey) {
+    const std::string light = "lights: [{type: constant, radiance: 1}]\n";
+    EXPECT_EQ(parse_scene_string("omega: 1\n" + light, "scene.yaml").integrator.sampler, SamplerType::Sobol);
+    EXPECT_EQ(parse_scene_string("omega: 1\nsampler: {type: independent}\n" + light, "scene.yaml").integrator.sampler,
+              SamplerType::Independent);
+    EXPECT_EQ(parse_scene_string("omega: 1\nsampler: {type: sobol}\n" + light, "scene.yaml").integrator.sampler,
+              SamplerType::Sobol);
+    EXPECT_NE(parse_error("omega: 1\nsampler: {type: halton}\n").find("scene.yaml:2: sampler.type:"), std::string::npos);
+    EXPECT_EQ(parse_error("omega: 1\nsampler: {type: sobol, seed: 3}\n"), "scene.yaml:2: sampler.seed: unknown key");
+}

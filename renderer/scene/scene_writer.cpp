@@ -143,6 +143,7 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
     const IntegratorDesc& it = d.integrator;
     const char* itype = integrator_name(it.type);
     o += fmt::format("integrator: {{type: {}, max_depth: {}, rr_depth: {}}}\n", itype, it.max_depth, it.rr_depth);
+    if (it.sampler != SamplerType::Sobol) o += fmt::format("sampler: {{type: {}}}\n", sampler_name(it.sampler));
 
     const SensorDesc& s = d.sensor;
     o += "sensor:\n";

@@ -66,6 +66,7 @@ TEST_F(CliTest, RendersAndWritesHeader) {
     EXPECT_EQ(img.attributes["omega.spp"], "3");
     EXPECT_EQ(img.attributes["omega.integrator"], "path");
     EXPECT_EQ(img.attributes["omega.seed"], "9");
+    EXPECT_EQ(img.attributes["omega.sampler"], "sobol");  // the default
     EXPECT_EQ(img.attributes["omega.nonfinite"], "0");
     EXPECT_TRUE(img.attributes.count("omega.time_s"));
     EXPECT_TRUE(img.attributes.count("omega.warnings"));
@@ -141,6 +142,7 @@ TEST_F(CliTest, PartsRenderedApartMergeToTheSingleRender) {
         EXPECT_EQ(merged.attributes["omega.spp"], "9");
         EXPECT_EQ(merged.attributes["omega.samples"], "0:9");
         EXPECT_EQ(merged.attributes["omega.integrator"], integrator);
+        EXPECT_EQ(merged.attributes["omega.sampler"], "sobol");
         ASSERT_EQ(whole.rgb.size(), merged.rgb.size());
         ASSERT_EQ(whole.var.size(), merged.var.size());
         for (auto [a, b] : {std::pair{&whole.rgb, &merged.rgb}, std::pair{&whole.var, &merged.var}})
@@ -156,6 +158,17 @@ TEST_F(CliTest, PartsRenderedApartMergeToTheSingleRender) {
     CmdResult bad = run("merge " + path("p0.exr") + " " + path("c1.exr") + " -o " + path("bad.exr"));
     EXPECT_EQ(bad.code, 2) << bad.output;
     EXPECT_NE(bad.output.find("c1.exr: scene hash"), std::string::npos) << bad.output;
+    // A part made with the other sampler (p0.exr is bdpt now) is refused, naming it; --sampler
+    // reaches the header.
+    ASSERT_EQ(
+        run("render " + scene + " --samples 2:7 --seed 3 -q --integrator bdpt --sampler independent -o " + path("i1.exr"))
+            .code,
+        0);
+    EXPECT_EQ(omega::read_exr(path("i1.exr")).attributes["omega.sampler"], "independent");
+    CmdResult mixed = run("merge " + path("p0.exr") + " " + path("i1.exr") + " -o " + path("bad.exr"));
+    EXPECT_EQ(mixed.code, 2) << mixed.output;
+    EXPECT_NE(mixed.output.find("i1.exr: sampler independent differs"), std::string::npos) << mixed.output;
+    EXPECT_EQ(run("render " + scene + " --spp 2 --sampler halton -q -o " + path("bad.exr")).code, 2);
     // Overlaps and gaps are refused; a plain render is not a part; a bad range is a usage error.
     EXPECT_EQ(run("merge " + path("p0.exr") + " " + path("p0.exr") + " -o " + path("bad.exr")).code, 2);
     CmdResult gap = run("merge " + path("p0.exr") + " " + path("p2.exr") + " -o " + path("gap.exr"));

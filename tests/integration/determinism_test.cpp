@@ -46,26 +46,29 @@ TEST(Determinism, SeedChangesTheImage) {
 // for every integrator, variance included: the resumed run's passes (5, then 1, 2, 4, ...) are
 // not the whole run's (1, 2, 4, 8, ...), and neither may show.
 TEST(Determinism, ResumedRangesMergeExactly) {
-    for (IntegratorType type : {IntegratorType::Path, IntegratorType::Light, IntegratorType::Bdpt}) {
-        SceneDesc d = small_scene();
-        d.integrator.type = type;
-        d.integrator.max_depth = 5;
-        auto whole = test::render(d, 24, 5, 2);
-        auto scene = Scene::build(d);
-        RenderSettings rs;
-        rs.seed = 5;
-        rs.threads = 2;
-        rs.integrator = d.integrator;
-        rs.halt.spp = 5;
-        RenderSession first(*scene, rs);
-        first.run();
-        rs.first_sample = 5;
-        rs.halt.spp = 24;
-        RenderSession second(*scene, rs);
-        second.film() = Film::deserialize(d.sensor.film, first.film().serialize());  // as a checkpoint does
-        second.run();
-        EXPECT_TRUE(bit_identical(whole.film(), second.film())) << integrator_name(type);
-        EXPECT_GT(whole.film().pixel(20, 15).var_of_mean.x, 0.0) << integrator_name(type);
+    for (SamplerType sampler : {SamplerType::Sobol, SamplerType::Independent}) {
+        for (IntegratorType type : {IntegratorType::Path, IntegratorType::Light, IntegratorType::Bdpt}) {
+            SceneDesc d = small_scene();
+            d.integrator.type = type;
+            d.integrator.sampler = sampler;
+            d.integrator.max_depth = 5;
+            auto whole = test::render(d, 24, 5, 2);
+            auto scene = Scene::build(d);
+            RenderSettings rs;
+            rs.seed = 5;
+            rs.threads = 2;
+            rs.integrator = d.integrator;
+            rs.halt.spp = 5;
+            RenderSession first(*scene, rs);
+            first.run();
+            rs.first_sample = 5;
+            rs.halt.spp = 24;
+            RenderSession second(*scene, rs);
+            second.film() = Film::deserialize(d.sensor.film, first.film().serialize());  // as a checkpoint does
+            second.run();
+            EXPECT_TRUE(bit_identical(whole.film(), second.film())) << integrator_name(type) << " " << sampler_name(sampler);
+            EXPECT_GT(whole.film().pixel(20, 15).var_of_mean.x, 0.0) << integrator_name(type);
+        }
     }
 }
 

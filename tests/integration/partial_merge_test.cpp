@@ -1,5 +1,5 @@
 // Partial renders merge into the single render of the same range (film/partial_exr.h): for every
-// integrator and for splits into 1, 2, 3 and 7 uneven parts, written to EXR and read back as
+// integrator and sampler and for splits into 1, 2, 3 and 7 uneven parts, written to EXR and read back as
 // `omega merge` does. Mismatched, overlapping and gapped parts are refused with the files named.
 #include <gtest/gtest.h>
 
@@ -48,7 +48,8 @@ protected:
                                      .string();
         ExrMeta meta;
         meta.spp = r.size();
-        write_partial_exr(path, s.film(), meta, PartInfo{{r}, hash, seed, integrator_name(d.integrator.type)});
+        write_partial_exr(path, s.film(), meta,
+                          PartInfo{{r}, hash, seed, integrator_name(d.integrator.type), sampler_name(d.integrator.sampler)});
         return path;
     }
 
@@ -90,35 +91,41 @@ Agreement compare(const Film& a, const Film& b) {
 TEST_F(PartialMerge, AnySplitEqualsTheSingleRender) {
     const std::vector<std::vector<long long>> splits = {
         {0, 24}, {0, 11, 24}, {0, 1, 20, 24}, {0, 2, 3, 7, 8, 15, 16, 24}};
-    for (IntegratorType type : {IntegratorType::Path, IntegratorType::Light, IntegratorType::Bdpt}) {
-        SceneDesc d = box_scene();
-        d.integrator.type = type;
-        auto whole = test::render(d, 24, 5, 2);
-        auto scene = Scene::build(d);
-        for (const auto& cuts : splits) {
-            std::vector<std::string> paths;
-            // Given out of order: the merge sorts by range, so the order of arguments cannot matter.
-            for (size_t i = cuts.size() - 1; i > 0; --i) paths.push_back(part(d, *scene, {cuts[i - 1], cuts[i]}));
-            MergeResult m = merge(paths);
-            const std::string what = std::string(integrator_name(type)) + ", " + std::to_string(paths.size()) + " part(s)";
-            EXPECT_EQ(format_ranges(m.part.ranges), "0:24") << what;
-            EXPECT_EQ(m.meta.spp, 24) << what;
-            EXPECT_TRUE(m.gaps.empty()) << what;
-            const Agreement g = compare(whole.film(), m.film);
-            EXPECT_LE(g.max_rel, 1e-6) << what;
-            // Double rounding differs between Welford and Chan's update, so a float that straddles
-            // a rounding boundary may differ by an ulp; nearly all must not.
-            EXPECT_GE(double(g.identical), 0.99 * double(g.values)) << what;
-            std::printf("  %s: %lld of %lld float values bit-identical, max relative difference %.3g\n", what.c_str(),
-                        g.identical, g.values, g.max_rel);
-            if (paths.size() == 1) {
-                EXPECT_EQ(g.identical, g.values) << what;  // one part is the render itself
+    // Sobol' parts cut at unaligned sample indices (11, 7...) still merge exactly: a sample's
+    // values depend only on (seed, pixel, index, dimension).
+    for (SamplerType sampler : {SamplerType::Sobol, SamplerType::Independent}) {
+        for (IntegratorType type : {IntegratorType::Path, IntegratorType::Light, IntegratorType::Bdpt}) {
+            SceneDesc d = box_scene();
+            d.integrator.type = type;
+            d.integrator.sampler = sampler;
+            auto whole = test::render(d, 24, 5, 2);
+            auto scene = Scene::build(d);
+            for (const auto& cuts : splits) {
+                std::vector<std::string> paths;
+                // Given out of order: the merge sorts by range, so the order of arguments cannot matter.
+                for (size_t i = cuts.size() - 1; i > 0; --i) paths.push_back(part(d, *scene, {cuts[i - 1], cuts[i]}));
+                MergeResult m = merge(paths);
+                const std::string what = std::string(integrator_name(type)) + " " + sampler_name(sampler) + ", " +
+                                         std::to_string(paths.size()) + " part(s)";
+                EXPECT_EQ(format_ranges(m.part.ranges), "0:24") << what;
+                EXPECT_EQ(m.meta.spp, 24) << what;
+                EXPECT_TRUE(m.gaps.empty()) << what;
+                const Agreement g = compare(whole.film(), m.film);
+                EXPECT_LE(g.max_rel, 1e-6) << what;
+                // Double rounding differs between Welford and Chan's update, so a float that straddles
+                // a rounding boundary may differ by an ulp; nearly all must not.
+                EXPECT_GE(double(g.identical), 0.99 * double(g.values)) << what;
+                std::printf("  %s: %lld of %lld float values bit-identical, max relative difference %.3g\n", what.c_str(),
+                            g.identical, g.values, g.max_rel);
+                if (paths.size() == 1) {
+                    EXPECT_EQ(g.identical, g.values) << what;  // one part is the render itself
+                }
+                // A merge's output is a part too: written and merged again, it changes nothing.
+                const std::string again = (dir_ / "again.exr").string();
+                write_partial_exr(again, m.film, m.meta, m.part);
+                EXPECT_EQ(compare(m.film, read_partial_exr(again).film).identical, g.values) << what;
+                for (const auto& p : paths) fs::remove(p);
             }
-            // A merge's output is a part too: written and merged again, it changes nothing.
-            const std::string again = (dir_ / "again.exr").string();
-            write_partial_exr(again, m.film, m.meta, m.part);
-            EXPECT_EQ(compare(m.film, read_partial_exr(again).film).identical, g.values) << what;
-            for (const auto& p : paths) fs::remove(p);
         }
     }
 }
@@ -158,6 +165,11 @@ TEST_F(PartialMerge, RefusesWhatDoesNotFitAndNamesTheFiles) {
     const std::string bd = (dir_ / "bdpt.exr").string();
     fs::rename(part(bdpt, *scene, {4, 8}), bd);
     refused({a, bd}, {"integrator bdpt differs", bd});
+    SceneDesc indep = d;
+    indep.integrator.sampler = SamplerType::Independent;
+    const std::string in = (dir_ / "independent.exr").string();
+    fs::rename(part(indep, *scene, {4, 8}), in);
+    refused({a, in}, {"sampler independent differs", in});
     SceneDesc wide = d;
     wide.sensor.film.width = 30;
     auto wide_scene = Scene::build(wide);

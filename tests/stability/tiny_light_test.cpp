@@ -26,6 +26,12 @@ SceneDesc tiny_light_scene(const TinySetup& s, double r, IntegratorType type) {
     SceneDesc d = test::empty_scene(s.res, s.res);
     d.integrator.type = type;
     d.integrator.max_depth = -1;
+    // Pinned to `independent`: the per-pixel t-test below assumes i.i.d. batches, and with this
+    // light's heavy tails its worst pixel exceeds the bound for about 1 seed in 10 under either
+    // sampler (BDPT, seeds 1-40: 4 with independent, 6 with sobol, whose batches are
+    // stratified, not i.i.d.); seed 31 was chosen under independent and fails under sobol (7.7).
+    // The image-level z under sobol stays within 1.3 (seeds 1, 2, 3 and 31, radii 1e-2 and 1e-4).
+    d.integrator.sampler = SamplerType::Independent;
     d.sensor.type = SensorType::Orthographic;
     d.sensor.to_world = Mat4::look_at({s.cx, s.cy, 5}, {s.cx, s.cy, 0}, {0, 1, 0}) * Mat4::scale({s.half, s.half, 1});
     d.materials["floor"] = test::diffuse("floor", Rgb(s.rho));

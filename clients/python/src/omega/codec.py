@@ -134,11 +134,13 @@ def asset_ref(name: str, sha256: str, size: int) -> dict:
 
 
 def submit(id: int, scene: bytes, name: str = "", priority: int = 0, halt_: dict | None = None, seed: int = 0,
-           integrator: str | None = None, assets=()) -> bytes:
+           integrator: str | None = None, assets=(), sampler: str | None = None) -> bytes:
     """assets: dicts from asset_ref(); the scene YAML is the payload."""
     h = {"type": "submit", "id": id, "name": name, "priority": priority, "halt": halt_ or {}, "seed": seed}
     if integrator is not None:
         h["integrator"] = integrator
+    if sampler is not None:
+        h["sampler"] = sampler  # "sobol" | "independent": overrides the scene's
     h["assets"] = list(assets)
     return encode_frame(h, scene)
 

@@ -316,10 +316,11 @@ class Client:
 
     def submit(self, scene_path, spp: int | None = None, *, time_s: float | None = None,
                target_error: float | None = None, priority: int = 0, seed: int = 0,
-               integrator: str | None = None, name: str | None = None) -> Job:
+               integrator: str | None = None, name: str | None = None, sampler: str | None = None) -> Job:
         """Sends a scene and the files it names; returns the new Job. spp, time_s and
         target_error override the scene's halting condition (the first reached stops the job);
-        without any the scene's own applies. A refused scene raises DaemonError with code
+        without any the scene's own applies. sampler ("sobol" | "independent") overrides the
+        scene's sampler. A refused scene raises DaemonError with code
         scene_invalid and the parser's `file:line: key: what` lines in its message."""
         _check_priority(priority)
         if spp is not None and not 1 <= spp <= codec.MAX_SPP:
@@ -336,7 +337,8 @@ class Client:
         sid = c.next_id()
         refs = [codec.asset_ref(a.name, a.sha256, a.size) for a in scene.assets]
         frame = codec.submit(sid, scene.yaml, name=name, priority=priority,
-                             halt_=codec.halt(spp, time_s, target_error), seed=seed, integrator=integrator, assets=refs)
+                             halt_=codec.halt(spp, time_s, target_error), seed=seed, integrator=integrator, assets=refs,
+                             sampler=sampler)
         h, _ = c.request(frame, sid)
         if h["type"] == "need_assets":
             missing = _field(h, "missing", list, "need_assets")
