@@ -11,7 +11,8 @@ Rgb bsdf_eval(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode)
     return std::visit(
         [&](const auto& m) -> Rgb {
             using T = std::decay_t<decltype(m)>;
-            if constexpr (std::is_same_v<T, BlackBsdf>) return Rgb(0.f);
+            // Black and thin sheet: no non-delta lobe, hence no density and no value.
+            if constexpr (std::is_same_v<T, BlackBsdf> || std::is_same_v<T, ThinDielectricBsdf>) return Rgb(0.f);
             else if constexpr (std::is_same_v<T, DielectricBsdf>) return eval(m, wo, wi, mode);
             else return eval(m, wo, wi);
         },
@@ -22,7 +23,7 @@ float bsdf_pdf_sa(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode m
     return std::visit(
         [&](const auto& m) -> float {
             using T = std::decay_t<decltype(m)>;
-            if constexpr (std::is_same_v<T, BlackBsdf>) return 0.f;
+            if constexpr (std::is_same_v<T, BlackBsdf> || std::is_same_v<T, ThinDielectricBsdf>) return 0.f;
             else if constexpr (std::is_same_v<T, DielectricBsdf>) return pdf_sa(m, wo, wi, mode);
             else return pdf_sa(m, wo, wi);
         },
@@ -36,6 +37,7 @@ std::optional<BsdfSample> bsdf_sample(const Bsdf& b, const Vec3& wo, float uc, V
             if constexpr (std::is_same_v<T, BlackBsdf>) return std::nullopt;
             else if constexpr (std::is_same_v<T, DielectricBsdf>) return sample(m, wo, uc, u, mode);
             else if constexpr (std::is_same_v<T, PlasticBsdf>) return sample(m, wo, uc, u);
+            else if constexpr (std::is_same_v<T, ThinDielectricBsdf>) return sample(m, wo, uc);
             else return sample(m, wo, u);
         },
         b);
@@ -68,6 +70,8 @@ uint8_t bsdf_lobes(const Bsdf& b) {
                 // The coat's reflection and the substrate are separate lobes; a path through the
                 // smooth coat's mirror lobe is S, one through the substrate or a rough coat is D.
                 return kLobeReflection | kLobeDiffuse | (m.alpha == 0 ? kLobeDelta : kLobeGlossy);
+            } else if constexpr (std::is_same_v<T, ThinDielectricBsdf>) {
+                return kLobeReflection | kLobeTransmission | kLobeDelta;
             } else if constexpr (std::is_same_v<T, ConductorBsdf>) {
                 bool smooth = m.alpha_u == 0 && m.alpha_v == 0;
                 return kLobeReflection | (smooth ? kLobeDelta : kLobeGlossy);

@@ -73,6 +73,17 @@ struct DielectricBsdf {
     MicrofacetType distribution = MicrofacetType::GGX;
 };
 
+// Thin dielectric sheet (a window pane): an infinitely thin slab of relative IOR eta = int_ior /
+// ext_ior with both faces parallel. Specular reflection plus straight-through transmission
+// (wi = -wo, no refraction offset), the slab's internal bounces summed per polarisation as
+// Tungsten's thinsheet does (see thin_dielectric.cpp). Both lobes are delta; the sheet is
+// symmetric, so it looks the same from either side and needs no TransportMode.
+struct ThinDielectricBsdf {
+    float eta = 1.5f;
+    Rgb specular_reflectance{1.f, 1.f, 1.f};
+    Rgb specular_transmittance{1.f, 1.f, 1.f};
+};
+
 // Plastic: a smooth dielectric coat over a Lambertian base (Tungsten's plastic / rough_plastic,
 // Mitsuba's plastic / roughplastic; see plastic.cpp for the model and where it comes from).
 // alpha == 0 is the smooth coat (a delta reflection plus the diffuse substrate); alpha > 0 makes
@@ -101,7 +112,7 @@ struct PlasticBsdf {
 // Absorbs everything; used for emitters that should not reflect.
 struct BlackBsdf {};
 
-using Bsdf = std::variant<DiffuseBsdf, ConductorBsdf, DielectricBsdf, PlasticBsdf, BlackBsdf>;
+using Bsdf = std::variant<DiffuseBsdf, ConductorBsdf, DielectricBsdf, PlasticBsdf, ThinDielectricBsdf, BlackBsdf>;
 
 Rgb bsdf_eval(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
 float bsdf_pdf_sa(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
@@ -132,5 +143,11 @@ inline const Bsdf& resolve_bsdf(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
 // Hemispherical average of the dielectric Fresnel reflectance seen from inside a medium of
 // relative index eta (int_ior / ext_ior): 2 ∫_0^1 F_int(mu) mu dmu, by quadrature in double.
 float plastic_fdr_int(float eta);
+
+// Reflectance of a thin slab of relative IOR eta at incidence |cos_i|, with the incoherent sum
+// over the slab's internal bounces taken per polarisation and then averaged (Tungsten's
+// Fresnel::thinFilmReflectance): R' = (2 Rs/(1 + Rs) + 2 Rp/(1 + Rp)) / 2. Its transmittance is
+// 1 - R' (no absorption).
+float thin_slab_reflectance(float cos_i, float eta);
 
 }  // namespace omega

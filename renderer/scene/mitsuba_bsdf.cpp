@@ -222,9 +222,8 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         put_conductor();
         put_alpha("0.1");
     } else if (type == "dielectric" || type == "roughdielectric" || type == "thindielectric") {
-        y["type"] = "dielectric";
-        if (type == "thindielectric")
-            warn(n, key, "thindielectric is approximated by a dielectric interface (the shape is treated as solid glass)");
+        // Mitsuba 3 and 0.6 share the parameters and defaults (BK7 in air, Ks = Kt = 1).
+        y["type"] = type == "thindielectric" ? "thindielectric" : "dielectric";
         for (const char* p : {"int_ior", "ext_ior"}) put(p, p);
         put_colour("specular_reflectance", "specular_reflectance");
         put_colour("specular_transmittance", "specular_transmittance");

@@ -393,6 +393,32 @@ TEST(MitsubaImporter, MaterialsMapToOmegaBsdfs) {
     expect_round_trip(d);
 }
 
+// Both syntaxes (0.6's camelCase too), Mitsuba's defaults (BK7 in air) when nothing is given.
+TEST(MitsubaImporter, ThinDielectricMapsToTheThinSheet) {
+    SceneDesc d = import(R"(
+<bsdf type="thindielectric" id="def"/>
+<bsdf type="thindielectric" id="pane"><float name="int_ior" value="1.5"/><float name="ext_ior" value="1.0"/>
+  <rgb name="specular_transmittance" value="0.9, 0.8, 0.7"/><rgb name="specular_reflectance" value="0.5"/></bsdf>
+<shape type="rectangle"><ref id="def"/></shape>
+<shape type="rectangle"><ref id="pane"/></shape>
+)" + std::string(kLitBox));
+    const auto& def = std::get<ThinDielectricBsdf>(d.materials.at("def").bsdf);
+    EXPECT_FLOAT_EQ(def.eta, 1.5046f / 1.000277f);
+    expect_rgb(def.specular_reflectance, 1.f, 1.f, 1.f);
+    expect_rgb(def.specular_transmittance, 1.f, 1.f, 1.f);
+    const auto& pane = std::get<ThinDielectricBsdf>(d.materials.at("pane").bsdf);
+    EXPECT_FLOAT_EQ(pane.eta, 1.5f);
+    expect_rgb(pane.specular_reflectance, 0.5f, 0.5f, 0.5f);
+    expect_rgb(pane.specular_transmittance, 0.9f, 0.8f, 0.7f);
+    ASSERT_EQ(d.warnings.size(), 1u) << all_warnings(d);  // only the missing sensor
+    expect_round_trip(d);
+
+    SceneDesc legacy = import_mitsuba_string(R"(<scene version="0.6.0">
+<bsdf type="thindielectric" id="pane"><float name="intIOR" value="1.33"/><float name="extIOR" value="1"/></bsdf>
+<shape type="rectangle"><ref id="pane"/></shape></scene>)", "scene.xml");
+    EXPECT_FLOAT_EQ(std::get<ThinDielectricBsdf>(legacy.materials.at("pane").bsdf).eta, 1.33f);
+}
+
 // Both syntaxes, Mitsuba's defaults written out (Omega's own differ: ggx), parameters by name.
 TEST(MitsubaImporter, PlasticMapsToTheCoatedBsdf) {
     SceneDesc d = import(R"(
@@ -622,7 +648,6 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
         "sensor.film.rfilter: reconstruction filter 'mitchell' is not supported",
         "medium: <medium type=\"homogeneous\"> is not supported and was ignored",
         "include: <include> is not supported and was ignored",
-        "bsdf(thin): thindielectric is approximated by a dielectric",
         "bsdf(n): the null BSDF",
         "bsdf(h): BSDF 'hair' is not supported; using a grey diffuse",
         "bsdf(bump): BSDF 'bumpmap' is not supported; using its nested BSDF",
@@ -641,7 +666,7 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
     // Plastic is supported now: no warning, and the coat is kept.
     expect_rgb(std::get<PlasticBsdf>(d.materials.at("p").bsdf).diffuse_reflectance, 0.2f, 0.2f, 0.2f);
     EXPECT_GT(std::get<PlasticBsdf>(d.materials.at("rp").bsdf).alpha, 0.f);
-    EXPECT_TRUE(std::holds_alternative<DielectricBsdf>(d.materials.at("thin").bsdf));
+    EXPECT_TRUE(std::holds_alternative<ThinDielectricBsdf>(d.materials.at("thin").bsdf));  // supported now
     EXPECT_TRUE(std::holds_alternative<BlackBsdf>(d.materials.at("n").bsdf));
     EXPECT_EQ(d.integrator.type, IntegratorType::Path);
     EXPECT_EQ(d.sensor.halt.spp, 16);

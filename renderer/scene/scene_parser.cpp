@@ -145,7 +145,7 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Materials
 
-enum class MatType { Diffuse, Conductor, Dielectric, Plastic, RoughPlastic, Black };
+enum class MatType { Diffuse, Conductor, Dielectric, ThinDielectric, Plastic, RoughPlastic, Black };
 
 void parse_alpha(ParamBag& b, float& au, float& av) {
     bool iso = b.has("alpha"), aniso = b.has("alpha_u") || b.has("alpha_v");
@@ -301,6 +301,7 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
     MatType type = ParamBag::enum_value<MatType>(b.require("type"), {{"diffuse", MatType::Diffuse},
                                                                      {"conductor", MatType::Conductor},
                                                                      {"dielectric", MatType::Dielectric},
+                                                                     {"thindielectric", MatType::ThinDielectric},
                                                                      {"plastic", MatType::Plastic},
                                                                      {"roughplastic", MatType::RoughPlastic},
                                                                      {"black", MatType::Black}});
@@ -353,6 +354,17 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
             d.specular_transmittance = rgb_in(b, "specular_transmittance", d.specular_transmittance, 0, 1);
             parse_alpha(b, d.alpha_u, d.alpha_v);
             d.distribution = parse_distribution(b);
+            m.bsdf = d;
+            break;
+        }
+        case MatType::ThinDielectric: {
+            ThinDielectricBsdf d;
+            // Mitsuba's defaults: BK7 glass in air.
+            float int_ior = parse_ior(b, "int_ior", 1.5046f);
+            float ext_ior = parse_ior(b, "ext_ior", 1.000277f);
+            d.eta = int_ior / ext_ior;
+            d.specular_reflectance = rgb_in(b, "specular_reflectance", d.specular_reflectance, 0, 1);
+            d.specular_transmittance = rgb_in(b, "specular_transmittance", d.specular_transmittance, 0, 1);
             m.bsdf = d;
             break;
         }

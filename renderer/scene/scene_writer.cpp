@@ -92,6 +92,10 @@ std::string material(const MaterialDesc& m, const std::string& base_dir) {
             num(d->eta), rgb(d->specular_reflectance), rgb(d->specular_transmittance), alpha(d->alpha_u, d->alpha_v),
             dist(d->distribution));
     }
+    if (auto* d = std::get_if<ThinDielectricBsdf>(&b))
+        return fmt::format("{{type: thindielectric, int_ior: {}, ext_ior: 1, specular_reflectance: {}, "
+                           "specular_transmittance: {}}}",
+                           num(d->eta), rgb(d->specular_reflectance), rgb(d->specular_transmittance));
     if (auto* p = std::get_if<PlasticBsdf>(&b)) {
         // int_ior / ext_ior reproduces eta exactly with ext_ior 1 (and with it fdr_int).
         std::string s = fmt::format("{{type: {}, diffuse_reflectance: {}, specular_reflectance: {}, int_ior: {}, ext_ior: 1, "
