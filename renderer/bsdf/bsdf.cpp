@@ -51,6 +51,13 @@ const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
         tmp = q;
         return tmp;
     }
+    if (const auto* c = std::get_if<ConductorBsdf>(&b)) {
+        ConductorBsdf q = *c;
+        q.specular_reflectance = q.specular_reflectance_tex->eval(uv);
+        q.specular_reflectance_tex = nullptr;
+        tmp = q;
+        return tmp;
+    }
     DiffuseBsdf d = std::get<DiffuseBsdf>(b);
     d.reflectance = d.reflectance_tex->eval(uv);
     d.reflectance_tex = nullptr;

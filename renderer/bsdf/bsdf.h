@@ -62,6 +62,8 @@ struct ConductorBsdf {
     float alpha_u = 0, alpha_v = 0;
     MicrofacetType distribution = MicrofacetType::GGX;
     bool two_sided = true;
+    // As DiffuseBsdf::reflectance_tex, for specular_reflectance (which then holds the mean).
+    const BitmapTexture* specular_reflectance_tex = nullptr;
 };
 
 // Dielectric interface; eta = int_ior / ext_ior. alpha == 0 is smooth.
@@ -134,6 +136,7 @@ const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp);
 inline bool bsdf_is_textured(const Bsdf& b) {
     if (const auto* d = std::get_if<DiffuseBsdf>(&b)) return d->reflectance_tex != nullptr;
     if (const auto* p = std::get_if<PlasticBsdf>(&b)) return p->diffuse_reflectance_tex != nullptr;
+    if (const auto* c = std::get_if<ConductorBsdf>(&b)) return c->specular_reflectance_tex != nullptr;
     return false;
 }
 inline const Bsdf& resolve_bsdf(const Bsdf& b, Vec2 uv, Bsdf& tmp) {

@@ -58,23 +58,39 @@ YAML::Node Importer::bitmap(pugi::xml_node tex, const std::string& key) {
     if (auto c = find_param(e, "filter_type")) y["filter"] = attr(c, "value", key);
     if (auto c = find_param(e, "wrap_mode")) y["wrap"] = attr(c, "value", key);
     if (auto c = find_param(e, "raw")) y["raw"] = scalar(c, key);
-    if (auto c = find_param(e, "to_uv")) {
-        // Mitsuba reads to_uv as the 2D affine part (rows and columns x, y, w) of the 4x4 it builds.
-        Mat4 m = to_world(c, key + ".to_uv");
-        bool planar = m(0, 2) == 0 && m(1, 2) == 0 && m(2, 0) == 0 && m(2, 1) == 0;
-        if (planar) {
-            YAML::Node l(YAML::NodeType::Sequence);
-            for (auto [r, col] : {std::pair{0, 0}, {0, 1}, {0, 3}, {1, 0}, {1, 1}, {1, 3}}) l.push_back(fmt::format("{}", m(r, col)));
-            YAML::Node op(YAML::NodeType::Map);
-            op["matrix"] = l;
-            y["to_uv"] = op;
-        } else {
-            warn(c, key, "to_uv mixes in the z axis, which a uv map does not have; it was ignored");
-        }
-    }
+    if (auto c = find_param(e, "to_uv"))
+        if (YAML::Node t = to_uv(c, key)) y["to_uv"] = t;
     // Storage and device details: the same texture values.
     for (const char* ignored : {"format", "accel"})
         if (auto c = find_param(e, ignored)) (void)c;
+    warn_unused(e);
+    return y;
+}
+
+YAML::Node Importer::to_uv(pugi::xml_node c, const std::string& key) {
+    // Mitsuba reads to_uv as the 2D affine part (rows and columns x, y, w) of the 4x4 it builds.
+    Mat4 m = to_world(c, key + ".to_uv");
+    bool planar = m(0, 2) == 0 && m(1, 2) == 0 && m(2, 0) == 0 && m(2, 1) == 0;
+    if (!planar) {
+        warn(c, key, "to_uv mixes in the z axis, which a uv map does not have; it was ignored");
+        return YAML::Node();
+    }
+    YAML::Node l(YAML::NodeType::Sequence);
+    for (auto [r, col] : {std::pair{0, 0}, {0, 1}, {0, 3}, {1, 0}, {1, 1}, {1, 3}}) l.push_back(fmt::format("{}", m(r, col)));
+    YAML::Node op(YAML::NodeType::Map);
+    op["matrix"] = l;
+    return op;
+}
+
+// Mitsuba's checkerboard (3 and 0.6: color0, color1, to_uv; defaults 0.4 and 0.2).
+YAML::Node Importer::checkerboard(pugi::xml_node tex, const std::string& key) {
+    Elem e{tex, key, {}};
+    YAML::Node y(YAML::NodeType::Map);
+    y["type"] = "checkerboard";
+    for (const char* p : {"color0", "color1"})
+        if (auto c = find_param(e, p)) y[p] = colour(c, key + "." + p);
+    if (auto c = find_param(e, "to_uv"))
+        if (YAML::Node t = to_uv(c, key)) y["to_uv"] = t;
     warn_unused(e);
     return y;
 }
@@ -86,6 +102,7 @@ YAML::Node Importer::colour(pugi::xml_node c, const std::string& key, bool textu
         tag = c.name();
     }
     if (tag == "texture" && texture_ok && attr(c, "type", key) == "bitmap") return bitmap(c, key);
+    if (tag == "texture" && texture_ok && attr(c, "type", key) == "checkerboard") return checkerboard(c, key);
     if (tag == "texture") {
         Rgb a = texture_average(c, key);
         return list3(fmt::format("{}", a.x), fmt::format("{}", a.y), fmt::format("{}", a.z));
@@ -198,7 +215,7 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         }
         put_colour("eta", "eta");
         put_colour("k", "k");
-        put_colour("specular_reflectance", "specular_reflectance");
+        put_colour("specular_reflectance", "specular_reflectance", true);
         y["two_sided"] = two_sided;
     };
 
@@ -211,6 +228,19 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         if (count > 1) warn(n, key, "twosided with two different BSDFs is not supported; the front one is used on both sides");
         for (pugi::xml_node c : n.children()) e.use(c);
         return read_bsdf(inner, key, true, lines);
+    }
+    if (type == "mask") {
+        // Mitsuba's mask: the nested BSDF with probability `opacity` (default 0.5 in 3 and 0.6),
+        // a pass-through otherwise; Omega keeps the opacity on the material (Scene::intersect).
+        pugi::xml_node inner = nested();
+        if (!inner) fail(n, key, "mask needs a nested <bsdf>");
+        pugi::xml_node op = find_param(e, "opacity");
+        warn_unused(e);
+        y = read_bsdf(inner, key, two_sided, lines);
+        if (static_cast<const YAML::Node&>(y)["opacity"]) fail(n, key, "nested masks are not supported");
+        y["opacity"] = op ? colour(op, key + ".opacity", true) : YAML::Node("0.5");
+        if (op) lines["opacity"] = line_of(op);
+        return y;
     }
     if (type == "diffuse") {
         y["type"] = "diffuse";

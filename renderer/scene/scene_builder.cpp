@@ -3,6 +3,7 @@
 // however many materials name it.
 #include <cmath>
 #include <map>
+#include <tuple>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -59,6 +60,15 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
     std::unordered_map<std::string, uint32_t> material_index;
     std::map<std::pair<std::string, bool>, std::shared_ptr<const Image>> images;  // (file, raw)
     auto texture_for = [&](const BitmapDesc& bd) -> const BitmapTexture* {
+        if (bd.checker) {
+            auto tex = std::make_unique<BitmapTexture>();
+            tex->checker = true;
+            tex->color0 = bd.color0;
+            tex->color1 = bd.color1;
+            tex->to_uv = bd.to_uv;
+            s->textures_.push_back(std::move(tex));
+            return s->textures_.back().get();
+        }
         auto& img = images[{bd.file, bd.raw}];
         if (!img) {
             poll();
@@ -88,16 +98,35 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
                 p->diffuse_reflectance_tex = texture_for(*bd);
                 p->diffuse_reflectance = p->diffuse_reflectance_tex->mean();
             } else {
-                throw SceneError(fmt::format("{}: {}: only a diffuse or plastic reflectance can be a bitmap", where(bd->loc),
+                throw SceneError(fmt::format("{}: {}: only a diffuse or plastic reflectance can be a texture", where(bd->loc),
                                              bd->loc.key));
             }
+        }
+        if (const auto& bd = m->second.specular_texture) {
+            auto* c = std::get_if<ConductorBsdf>(&b);
+            if (!c)
+                throw SceneError(fmt::format("{}: {}: only a conductor's specular_reflectance can be a texture here",
+                                             where(bd->loc), bd->loc.key));
+            c->specular_reflectance_tex = texture_for(*bd);
+            c->specular_reflectance = c->specular_reflectance_tex->mean();
         }
         s->materials_.push_back(b);
         material_index.emplace(sd.material, idx);
         return idx;
     };
+    // Mask opacity per material (index as materials_), looked up like the BSDF's textures.
+    std::vector<std::pair<float, const BitmapTexture*>> opacity_of;
+    auto opacity_for = [&](uint32_t material, const std::string& name) {
+        if (opacity_of.size() <= material) {
+            const MaterialDesc& md = desc.materials.at(name);
+            opacity_of.resize(material + 1, {1.f, nullptr});
+            opacity_of[material] = {md.opacity, md.opacity_texture ? texture_for(*md.opacity_texture) : nullptr};
+        }
+        return opacity_of[material];
+    };
     auto textured = [&](uint32_t material) {
-        return bsdf_is_textured(s->materials_[material]);
+        return bsdf_is_textured(s->materials_[material]) || opacity_of[material].first < 1.f ||
+               opacity_of[material].second != nullptr;
     };
 
     s->shapes_.reserve(desc.shapes.size());
@@ -107,8 +136,12 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
         Shape sh;
         sh.name = fmt::format("shapes[{}]", i);
         sh.material = material_for(sd, i);
+        std::tie(sh.opacity, sh.opacity_tex) = opacity_for(sh.material, sd.material);
         sh.flip_normals = sd.flip_normals;
         if (sd.type == ShapeType::Sphere) {
+            if (sh.masked())
+                throw SceneError(fmt::format("{}: {}: a mask (opacity) on a sphere is not supported; use a mesh",
+                                             where(sd.loc), sh.name));
             sh.kind = ShapeKind::Sphere;
             // A sphere's to_world may translate and scale uniformly; anything else is rejected.
             Vec3d c = sd.to_world.point(sd.center);
@@ -242,6 +275,7 @@ void Scene::add_embree_geometry(const std::function<bool()>& cancelled) {
         auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                    3 * sizeof(unsigned), sh.mesh.triangle_count()));
         std::copy(sh.mesh.indices.begin(), sh.mesh.indices.end(), idx);
+        if (sh.masked()) attach_mask_filter(g, sh);
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(rtc_, g, unsigned(i));
         rtcReleaseGeometry(g);

@@ -274,11 +274,19 @@ UvTransform parse_to_uv(const ParamValue& v) {
     return t;
 }
 
+// A texture mapping: {type: bitmap, file, ...} or {type: checkerboard, color0, color1, to_uv}.
 BitmapDesc parse_bitmap(const ParamValue& v) {
     ParamBag b(v);
     BitmapDesc t;
     t.loc = v.loc();
-    ParamBag::enum_value<int>(b.require("type"), {{"bitmap", 0}});
+    if (ParamBag::enum_value<int>(b.require("type"), {{"bitmap", 0}, {"checkerboard", 1}}) == 1) {
+        t.checker = true;
+        t.color0 = rgb_in(b, "color0", t.color0, 0, 1);
+        t.color1 = rgb_in(b, "color1", t.color1, 0, 1);
+        if (auto u = b.get("to_uv")) t.to_uv = parse_to_uv(*u);
+        b.check_unused();
+        return t;
+    }
     NamedFile f = scene_file(b.require("file"));
     t.file = f.file;
     t.written = f.written;
@@ -334,7 +342,10 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
                 c.k = rgb_in(b, "k", c.k, 0, kInf);
                 c.has_ior = true;
             }
-            c.specular_reflectance = rgb_in(b, "specular_reflectance", c.specular_reflectance, 0, 1);
+            if (b.has("specular_reflectance") && b.get("specular_reflectance")->is_map())
+                m.specular_texture = parse_bitmap(*b.get("specular_reflectance"));
+            else
+                c.specular_reflectance = rgb_in(b, "specular_reflectance", c.specular_reflectance, 0, 1);
             parse_alpha(b, c.alpha_u, c.alpha_v);
             c.distribution = parse_distribution(b);
             c.two_sided = b.get_bool("two_sided", true);
@@ -393,6 +404,12 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
         }
         case MatType::Black: m.bsdf = BlackBsdf{}; break;
     }
+    // Any material may be masked (Mitsuba's mask wrapper): a number in [0, 1] or a texture whose
+    // first channel is the opacity.
+    if (b.has("opacity") && b.get("opacity")->is_map())
+        m.opacity_texture = parse_bitmap(*b.get("opacity"));
+    else
+        m.opacity = float_in(b, "opacity", 1.f, 0, false, 1, false);
     b.check_unused();
     return m;
 }

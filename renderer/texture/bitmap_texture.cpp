@@ -32,11 +32,15 @@ long long floor_index(float x, float& frac) {
 }  // namespace
 
 Rgb BitmapTexture::eval(Vec2 uv_in) const {
-    const Image& img = *image;
     Vec2 uv = to_uv.apply(uv_in);
     // A NaN uv (degenerate geometry) must not become an out-of-range index.
     if (!std::isfinite(uv.x)) uv.x = 0;
     if (!std::isfinite(uv.y)) uv.y = 0;
+    if (checker) {
+        bool mu = uv.x - std::floor(uv.x) > 0.5f, mv = uv.y - std::floor(uv.y) > 0.5f;
+        return mu == mv ? color0 : color1;
+    }
+    const Image& img = *image;
     const float x = uv.x * float(img.width), y = uv.y * float(img.height);
     float fx, fy;
     if (filter == TexFilter::Nearest) {
@@ -52,6 +56,7 @@ Rgb BitmapTexture::eval(Vec2 uv_in) const {
 }
 
 Rgb BitmapTexture::mean() const {
+    if (checker) return (color0 + color1) * 0.5f;  // equal areas over any whole number of checks
     Vec3d sum(0.0);
     for (const Rgb& t : image->texels) sum += Vec3d(t);
     return Rgb(sum / double(std::max<size_t>(image->texels.size(), 1)));
