@@ -40,7 +40,8 @@ Rgb Importer::texture_average(pugi::xml_node tex, const std::string& key) {
     Rgb avg{float(sum[0] / double(n)), float(sum[1] / double(n)), float(sum[2] / double(n))};
     for (int ch = 0; ch < 3; ++ch) avg[ch] = std::clamp(avg[ch], 0.f, 1.f);
     warn(tex, key,
-         fmt::format("bitmap '{}': Omega textures only a diffuse reflectance; using its average colour [{:.4g}, {:.4g}, "
+         fmt::format("bitmap '{}': this parameter takes no texture in Omega (a diffuse or plastic reflectance, a "
+                     "conductor's specular_reflectance, a mask's opacity do); using its average colour [{:.4g}, {:.4g}, "
                      "{:.4g}]{}",
                      file, avg.x, avg.y, avg.z, srgb ? " (sRGB-decoded)" : ""));
     return avg;

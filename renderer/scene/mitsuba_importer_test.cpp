@@ -75,6 +75,23 @@ void expect_same(const SceneDesc& a, const SceneDesc& b) {
             EXPECT_EQ(tx->raw, ty->raw) << name;
             EXPECT_EQ(tx->to_uv.m, ty->to_uv.m) << name;
         }
+        for (auto t : {&MaterialDesc::specular_texture, &MaterialDesc::opacity_texture}) {
+            const auto &sx = m.*t, &sy = b.materials.at(name).*t;
+            ASSERT_EQ(sx.has_value(), sy.has_value()) << name;
+            if (sx) {
+                EXPECT_EQ(sx->file, sy->file) << name;
+                EXPECT_EQ(sx->checker, sy->checker) << name;
+                EXPECT_EQ(sx->color0, sy->color0) << name;
+                EXPECT_EQ(sx->color1, sy->color1) << name;
+                EXPECT_EQ(sx->to_uv.m, sy->to_uv.m) << name;
+            }
+        }
+        if (tx) {
+            EXPECT_EQ(tx->checker, ty->checker) << name;
+            EXPECT_EQ(tx->color0, ty->color0) << name;
+            EXPECT_EQ(tx->color1, ty->color1) << name;
+        }
+        EXPECT_EQ(m.opacity, b.materials.at(name).opacity) << name;
         ASSERT_EQ(x.index(), y.index()) << name;
         if (auto* d = std::get_if<DiffuseBsdf>(&x)) {
             auto* e = std::get_if<DiffuseBsdf>(&y);
@@ -393,6 +410,50 @@ TEST(MitsubaImporter, MaterialsMapToOmegaBsdfs) {
     expect_round_trip(d);
 }
 
+// checkerboard on a diffuse reflectance and a conductor's specular_reflectance, and mask with a
+// constant, a default and a bitmap opacity, wrapped either way round with twosided.
+TEST(MitsubaImporter, CheckerboardAndMaskMapToTexturesAndOpacity) {
+    TempDir dir;
+    dir.write("alpha.ppm", std::string("P6\n2 1\n255\n") + std::string("\xff\xff\xff\x00\x00\x00", 6));
+    auto xml = dir.write("scene.xml", R"(<scene version="3.0.0">
+<bsdf type="diffuse" id="wall"><texture type="checkerboard" name="reflectance">
+  <rgb name="color0" value="0.8, 0.8, 0.8"/><rgb name="color1" value="0.1, 0.1, 0.15"/>
+  <transform name="to_uv"><scale x="4" y="4"/></transform></texture></bsdf>
+<bsdf type="roughconductor" id="metal"><texture type="checkerboard" name="specular_reflectance">
+  <float name="color0" value="1"/><float name="color1" value="0.25"/></texture></bsdf>
+<bsdf type="mask" id="half"><float name="opacity" value="0.3"/><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>
+<bsdf type="twosided" id="def"><bsdf type="mask"><bsdf type="diffuse"/></bsdf></bsdf>
+<bsdf type="mask" id="leaf"><texture type="bitmap" name="opacity"><string name="filename" value="alpha.ppm"/>
+  <boolean name="raw" value="true"/></texture><bsdf type="diffuse"/></bsdf>
+<shape type="rectangle"><ref id="wall"/></shape>
+<shape type="sphere"><ref id="metal"/></shape>
+<shape type="rectangle"><ref id="half"/></shape>
+<shape type="rectangle"><ref id="def"/></shape>
+<shape type="rectangle"><ref id="leaf"/></shape>
+)" + std::string(kLitBox) + "</scene>");
+    SceneDesc d = import_mitsuba_file(xml.string());
+    ASSERT_EQ(d.warnings.size(), 1u) << all_warnings(d);  // only the missing sensor
+    const auto& wall = *d.materials.at("wall").reflectance_texture;
+    EXPECT_TRUE(wall.checker);
+    EXPECT_EQ(wall.color1, (Rgb{0.1f, 0.1f, 0.15f}));
+    EXPECT_EQ(wall.to_uv.m, (std::array<float, 6>{4, 0, 0, 0, 4, 0}));
+    const auto& metal = *d.materials.at("metal").specular_texture;
+    EXPECT_TRUE(metal.checker);
+    EXPECT_EQ(metal.color0, Rgb(1.f));
+    EXPECT_EQ(metal.color1, Rgb(0.25f));
+    EXPECT_FLOAT_EQ(d.materials.at("half").opacity, 0.3f);
+    EXPECT_TRUE(std::get<DiffuseBsdf>(d.materials.at("half").bsdf).two_sided);
+    EXPECT_FLOAT_EQ(d.materials.at("def").opacity, 0.5f);  // Mitsuba's default
+    EXPECT_TRUE(std::get<DiffuseBsdf>(d.materials.at("def").bsdf).two_sided);
+    ASSERT_TRUE(d.materials.at("leaf").opacity_texture);
+    EXPECT_TRUE(d.materials.at("leaf").opacity_texture->raw);
+    EXPECT_FALSE(std::get<DiffuseBsdf>(d.materials.at("leaf").bsdf).two_sided);
+    expect_round_trip(d, dir.path.string());
+    auto scene = Scene::build(d);
+    EXPECT_TRUE(scene->shapes()[4].masked());
+    EXPECT_FALSE(scene->shapes()[0].masked());
+}
+
 // Both syntaxes (0.6's camelCase too), Mitsuba's defaults (BK7 in air) when nothing is given.
 TEST(MitsubaImporter, ThinDielectricMapsToTheThinSheet) {
     SceneDesc d = import(R"(
@@ -562,6 +623,7 @@ TEST(MitsubaImporter, BitmapMapsToATexture) {
 <bsdf type="diffuse" id="byref"><ref name="reflectance" id="t"/></bsdf>
 <bsdf type="plastic" id="plastic"><ref name="diffuse_reflectance" id="t"/></bsdf>
 <bsdf type="conductor" id="metal"><ref name="specular_reflectance" id="t"/></bsdf>
+<bsdf type="plastic" id="coat"><ref name="specular_reflectance" id="t"/></bsdf>
 <bsdf type="diffuse" id="spun"><texture type="bitmap" name="reflectance"><string name="filename" value="tex.ppm"/>
   <transform name="to_uv"><rotate x="1" angle="30"/></transform></texture></bsdf>
 <shape type="cube"><ref id="inline"/></shape>
@@ -570,6 +632,7 @@ TEST(MitsubaImporter, BitmapMapsToATexture) {
 <shape type="cube"><ref id="metal"/></shape>
 <shape type="cube"><ref id="spun"/></shape>
 <shape type="obj"><string name="filename" value="tri.obj"/><boolean name="flip_tex_coords" value="false"/></shape>
+<shape type="cube"><ref id="coat"/></shape>
 )" + std::string(kLitBox) + "</scene>");
     dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
     SceneDesc d = import_mitsuba_file(xml.string());
@@ -596,9 +659,14 @@ TEST(MitsubaImporter, BitmapMapsToATexture) {
     EXPECT_FALSE(has_warning(d, "bsdf(byref).reflectance: bitmap")) << all_warnings(d);
     EXPECT_TRUE(has_warning(d, "scene.xml:7: bsdf(inline).reflectance: parameter 'bogus' (<float>) is not supported"))
         << all_warnings(d);
-    EXPECT_TRUE(has_warning(d, "bsdf(metal).specular_reflectance: bitmap 'tex.ppm': Omega textures only a diffuse "
-                               "reflectance; using its average colour [0.5, 0, 0]"))
+    // A conductor's specular_reflectance is textured too now.
+    ASSERT_TRUE(d.materials.at("metal").specular_texture);
+    EXPECT_EQ(d.materials.at("metal").specular_texture->file, file);
+    EXPECT_FALSE(has_warning(d, "bsdf(metal)")) << all_warnings(d);
+    EXPECT_TRUE(has_warning(d, "bsdf(coat).specular_reflectance: bitmap 'tex.ppm': this parameter takes no texture "
+                               "in Omega"))
         << all_warnings(d);
+    EXPECT_TRUE(has_warning(d, "using its average colour [0.5, 0, 0]")) << all_warnings(d);
     EXPECT_TRUE(has_warning(d, "bsdf(spun).reflectance: to_uv mixes in the z axis")) << all_warnings(d);
     EXPECT_TRUE(d.materials.at("spun").reflectance_texture->to_uv.is_identity());
     expect_round_trip(d, dir.path.string());

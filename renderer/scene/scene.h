@@ -46,6 +46,9 @@ struct Shape {
     float opacity = 1.f;
     const BitmapTexture* opacity_tex = nullptr;
     bool masked() const { return opacity < 1.f || opacity_tex != nullptr; }
+    // Bump map (MaterialDesc::bump_texture): Scene::intersect tilts the shading normal.
+    const BitmapTexture* bump_tex = nullptr;
+    float bump_scale = 1.f;
     Vec3 sphere_axes[3];    // sphere: unit world directions of its local x, y, z (for uv)
     double area = 0;                     // world-space surface area
     DiscreteDistribution tri_by_area;    // triangles, for uniform area sampling

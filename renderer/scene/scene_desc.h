@@ -115,6 +115,9 @@ struct MaterialDesc {
     // opacity (1 = opaque), a constant or opacity_texture's first channel; see Scene::intersect.
     float opacity = 1.f;
     std::optional<BitmapDesc> opacity_texture;
+    // Bump map (Mitsuba's `bumpmap` wrapper): height = bump_scale x the texture's first channel.
+    std::optional<BitmapDesc> bump_texture;
+    float bump_scale = 1.f;
 };
 
 struct EmitterDesc {

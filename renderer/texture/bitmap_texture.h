@@ -26,6 +26,9 @@ struct BitmapTexture {
 
     // The reflectance at surface coordinates `uv` (to_uv is applied here).
     Rgb eval(Vec2 uv) const;
+    // d(first channel)/du' and /dv' of the bilinear interpolant, in units of uv (for bump maps,
+    // as Mitsuba's eval_1_grad), chained through to_uv back to surface uv.
+    Vec2 eval_grad(Vec2 uv) const;
     // The average texel: stands in for the texture where no hit is at hand.
     Rgb mean() const;
 };
