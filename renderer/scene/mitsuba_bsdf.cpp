@@ -243,6 +243,33 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         if (op) lines["opacity"] = line_of(op);
         return y;
     }
+    if (type == "bumpmap") {
+        // Mitsuba's bumpmap (3 and 0.6): a nested height texture of any name (the first), `scale`
+        // (default 1), and the nested BSDF shaded with the tilted normal.
+        pugi::xml_node inner = nested();
+        if (!inner) fail(n, key, "bumpmap needs a nested <bsdf>");
+        pugi::xml_node tex;
+        for (pugi::xml_node c : n.children()) {
+            std::string t = c.name();
+            pugi::xml_node r = t == "ref" ? resolve_ref(c, key) : c;
+            if (std::string(r.name()) == "texture" && !tex) {
+                e.use(c);
+                tex = r;
+            }
+        }
+        if (!tex) fail(n, key, "bumpmap needs a nested height <texture>");
+        pugi::xml_node sc = find_param(e, "scale");
+        warn_unused(e);
+        y = read_bsdf(inner, key, two_sided, lines);
+        if (static_cast<const YAML::Node&>(y)["bump"]) fail(n, key, "nested bump maps are not supported");
+        std::string ttype = attr(tex, "type", key);
+        if (ttype == "bitmap") y["bump"] = bitmap(tex, key + ".height");
+        else if (ttype == "checkerboard") y["bump"] = checkerboard(tex, key + ".height");
+        else fail(tex, key, "a bumpmap height texture of type '" + ttype + "' is not supported (bitmap, checkerboard)");
+        y["bump_scale"] = sc ? scalar(sc, key) : YAML::Node("1");
+        if (sc) lines["bump_scale"] = line_of(sc);
+        return y;
+    }
     if (type == "diffuse") {
         y["type"] = "diffuse";
         put_colour("reflectance", "reflectance", true);

@@ -686,8 +686,7 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
 <bsdf type="thindielectric" id="thin"/>
 <bsdf type="null" id="n"/>
 <bsdf type="hair" id="h"/>
-<bsdf type="bumpmap" id="bump"><texture type="bitmap" name="arbitrary"><string name="filename" value="x.png"/></texture>
-  <bsdf type="diffuse"/></bsdf>
+<bsdf type="blendbsdf" id="bump"><float name="weight" value="0.5"/><bsdf type="diffuse"/></bsdf>
 <bsdf type="diffuse" id="extra"><float name="roughness" value="0.5"/></bsdf>
 <bsdf type="diffuse" id="unused"/>
 <shape type="cube"><ref id="p"/></shape>
@@ -718,7 +717,7 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
         "include: <include> is not supported and was ignored",
         "bsdf(n): the null BSDF",
         "bsdf(h): BSDF 'hair' is not supported; using a grey diffuse",
-        "bsdf(bump): BSDF 'bumpmap' is not supported; using its nested BSDF",
+        "bsdf(bump): BSDF 'blendbsdf' is not supported; using its nested BSDF",
         "bsdf(extra): parameter 'roughness' (<float>) is not supported",
         "bsdf(unused): never used by any shape",
         "shape[6]: parameter 'interior' (<ref>) is not supported and was ignored",

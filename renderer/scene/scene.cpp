@@ -111,6 +111,36 @@ void mask_filter(const RTCFilterFunctionNArguments* args) {
     }
 }
 
+// Mitsuba's bumpmap (bumpmap.cpp): with g = scale * grad_uv(height), the tangents become
+// dp/du' = dp/du + n (g_u - n.dp/du) and likewise for v; the shading normal is their cross
+// product, turned to the geometric normal's side. dp/du, dp/dv are the triangle's own, from its
+// positions and uvs (a rectangle's dp/du is to_world (2, 0, 0), as Mitsuba's). The nested BSDF
+// is then shaded in the tilted frame, and the walks' shading-normal correction (subpath.cpp,
+// Veach's adjoint for shading normals) applies to it as to interpolated normals.
+void apply_bump(const Shape& sh, uint32_t i0, uint32_t i1, uint32_t i2, SurfaceHit& hit) {
+    const auto& m = sh.mesh;
+    Vec2 t0{0, 0}, t1{1, 0}, t2{0, 1};  // no uvs: the barycentrics are the uvs (triangle_uv)
+    if (!m.uvs.empty()) {
+        t0 = m.uvs[i0];
+        t1 = m.uvs[i1];
+        t2 = m.uvs[i2];
+    }
+    Vec3 dp1 = m.positions[i1] - m.positions[i0], dp2 = m.positions[i2] - m.positions[i0];
+    float d1u = t1.x - t0.x, d1v = t1.y - t0.y, d2u = t2.x - t0.x, d2v = t2.y - t0.y;
+    float det = d1u * d2v - d1v * d2u;
+    if (!(std::abs(det) > 0)) return;  // degenerate uv mapping: no tangents, keep the normal
+    Vec3 dpdu = (dp1 * d2v - dp2 * d1v) / det, dpdv = (dp2 * d1u - dp1 * d2u) / det;
+    Vec2 g = sh.bump_tex->eval_grad(hit.uv);
+    const Vec3 n = hit.ns;
+    Vec3 du = dpdu + n * (sh.bump_scale * g.x - dot(n, dpdu));
+    Vec3 dv = dpdv + n * (sh.bump_scale * g.y - dot(n, dpdv));
+    Vec3 nb = cross(du, dv);
+    float len = length(nb);
+    if (!(len > 0) || !std::isfinite(len)) return;
+    nb = nb / len;
+    hit.ns = dot(nb, hit.ng) < 0 ? -nb : nb;
+}
+
 }  // namespace
 
 void attach_mask_filter(RTCGeometry g, const Shape& sh) {
@@ -187,6 +217,7 @@ bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
         hit.ng = ng;
         hit.planar = true;
         if (sh.uv_map != UvMap::None) hit.uv = triangle_uv(sh, i0, i1, i2, b0, b1, b2);
+        if (sh.bump_tex) apply_bump(sh, i0, i1, i2, hit);
     }
     return true;
 }

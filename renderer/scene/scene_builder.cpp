@@ -3,7 +3,6 @@
 // however many materials name it.
 #include <cmath>
 #include <map>
-#include <tuple>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -114,19 +113,29 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
         material_index.emplace(sd.material, idx);
         return idx;
     };
-    // Mask opacity per material (index as materials_), looked up like the BSDF's textures.
-    std::vector<std::pair<float, const BitmapTexture*>> opacity_of;
-    auto opacity_for = [&](uint32_t material, const std::string& name) {
-        if (opacity_of.size() <= material) {
+    // Mask opacity and bump map per material (index as materials_), made once per material.
+    struct ShapeTextures {
+        float opacity = 1.f;
+        const BitmapTexture* opacity_tex = nullptr;
+        const BitmapTexture* bump_tex = nullptr;
+        float bump_scale = 1.f;
+    };
+    std::vector<ShapeTextures> shape_tex;
+    auto shape_textures_for = [&](uint32_t material, const std::string& name) {
+        if (shape_tex.size() <= material) {
             const MaterialDesc& md = desc.materials.at(name);
-            opacity_of.resize(material + 1, {1.f, nullptr});
-            opacity_of[material] = {md.opacity, md.opacity_texture ? texture_for(*md.opacity_texture) : nullptr};
+            shape_tex.resize(material + 1);
+            ShapeTextures& t = shape_tex[material];
+            t.opacity = md.opacity;
+            if (md.opacity_texture) t.opacity_tex = texture_for(*md.opacity_texture);
+            if (md.bump_texture) t.bump_tex = texture_for(*md.bump_texture);
+            t.bump_scale = md.bump_scale;
         }
-        return opacity_of[material];
+        return shape_tex[material];
     };
     auto textured = [&](uint32_t material) {
-        return bsdf_is_textured(s->materials_[material]) || opacity_of[material].first < 1.f ||
-               opacity_of[material].second != nullptr;
+        const ShapeTextures& t = shape_tex[material];
+        return bsdf_is_textured(s->materials_[material]) || t.opacity < 1.f || t.opacity_tex || t.bump_tex;
     };
 
     s->shapes_.reserve(desc.shapes.size());
@@ -136,11 +145,17 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
         Shape sh;
         sh.name = fmt::format("shapes[{}]", i);
         sh.material = material_for(sd, i);
-        std::tie(sh.opacity, sh.opacity_tex) = opacity_for(sh.material, sd.material);
+        {
+            const ShapeTextures& t = shape_textures_for(sh.material, sd.material);
+            sh.opacity = t.opacity;
+            sh.opacity_tex = t.opacity_tex;
+            sh.bump_tex = t.bump_tex;
+            sh.bump_scale = t.bump_scale;
+        }
         sh.flip_normals = sd.flip_normals;
         if (sd.type == ShapeType::Sphere) {
-            if (sh.masked())
-                throw SceneError(fmt::format("{}: {}: a mask (opacity) on a sphere is not supported; use a mesh",
+            if (sh.masked() || sh.bump_tex)
+                throw SceneError(fmt::format("{}: {}: a mask (opacity) or bump map on a sphere is not supported; use a mesh",
                                              where(sd.loc), sh.name));
             sh.kind = ShapeKind::Sphere;
             // A sphere's to_world may translate and scale uniformly; anything else is rejected.
@@ -173,6 +188,8 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
                 case ShapeType::Sphere: break;
             }
             if (sd.face_normals) sh.mesh.normals.clear();
+            if (sh.bump_tex && sd.type == ShapeType::Disk)
+                throw SceneError(fmt::format("{}: {}: a bump map on a disk is not supported; use a mesh", where(sd.loc), sh.name));
             if (textured(sh.material)) sh.uv_map = sd.type == ShapeType::Disk ? UvMap::Disk : UvMap::Vertex;
             else sh.mesh.uvs.clear();  // nothing looks them up
             auto tf = Transform::make(sd.to_world);

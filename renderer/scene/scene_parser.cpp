@@ -410,6 +410,15 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
         m.opacity_texture = parse_bitmap(*b.get("opacity"));
     else
         m.opacity = float_in(b, "opacity", 1.f, 0, false, 1, false);
+    // Any material may be bump mapped (Mitsuba's bumpmap wrapper): height = bump_scale x the
+    // texture's first channel, in units of uv.
+    if (auto v = b.get("bump")) {
+        if (!v->is_map()) v->fail("expected a texture mapping ({type: bitmap, ...}), got " + v->describe());
+        m.bump_texture = parse_bitmap(*v);
+        m.bump_scale = float_in(b, "bump_scale", 1.f, -1e6, false, 1e6, false);
+    } else if (b.has("bump_scale")) {
+        b.get("bump_scale")->fail("bump_scale needs a bump texture");
+    }
     b.check_unused();
     return m;
 }

@@ -125,6 +125,10 @@ std::string material(const MaterialDesc& m, const std::string& base_dir) {
         s.pop_back();  // the closing brace
         s += ", opacity: " + (m.opacity_texture ? bitmap(*m.opacity_texture, base_dir) : num(m.opacity)) + "}";
     }
+    if (m.bump_texture) {
+        s.pop_back();
+        s += ", bump: " + bitmap(*m.bump_texture, base_dir) + ", bump_scale: " + num(m.bump_scale) + "}";
+    }
     return s;
 }
 

@@ -267,4 +267,32 @@ shapes:
               std::string::npos);
 }
 
+// Mitsuba's bumpmap on a rectangle: a height ramp in u tilts the shading normal by the analytic
+// amount, dp/du' = dp/du + n g_u with dp/du = (2, 0, 0) for the unit rectangle.
+TEST(TextureScene, BumpMapTiltsTheShadingNormal) {
+    Fixture f;
+    test::write_image_u8((f.dir.path / "ramp.png").string(), 4, 1, 1, {0, 64, 128, 192});
+    SceneDesc d = f.parse(R"(materials:
+  m: {type: diffuse, bump: {type: bitmap, file: ramp.png, raw: true}, bump_scale: 0.5}
+shapes:
+  - {type: rectangle, material: m}
+)");
+    ASSERT_TRUE(d.materials.at("m").bump_texture);
+    auto scene = Scene::build(d);
+    SurfaceHit h;
+    ASSERT_TRUE(scene->intersect(Ray{{0.01f, 0.2f, 2.f}, {0, 0, -1}}, h));  // u = 0.505: between texels 1 and 2
+    const float g = 0.5f * (64.f / 255.f) * 4.f;
+    Vec3 expect = normalize(Vec3(-2.f * g, 0.f, 4.f));  // cross((2, 0, g), (0, 2, 0))
+    EXPECT_NEAR(h.ns.x, expect.x, 1e-5f);
+    EXPECT_NEAR(h.ns.y, expect.y, 1e-5f);
+    EXPECT_NEAR(h.ns.z, expect.z, 1e-5f);
+    EXPECT_EQ(h.ng, Vec3(0, 0, 1));  // the geometry is untouched
+    // The writer keeps it.
+    std::string yaml = write_scene_yaml(d, "");
+    SceneDesc back = parse_scene_string(yaml, (f.dir.path / "back.yaml").string());
+    ASSERT_TRUE(back.materials.at("m").bump_texture) << yaml;
+    EXPECT_EQ(back.materials.at("m").bump_scale, 0.5f);
+    EXPECT_NE(f.error("materials: {m: {type: diffuse, bump_scale: 2}}\nshapes: []\n").find("bump"), std::string::npos);
+}
+
 }  // namespace

@@ -109,6 +109,30 @@ TEST(BitmapTexture, CheckerboardAsMitsuba) {
     EXPECT_EQ(d.eval({0.6f, 0.1f}), Rgb(0.2f));
 }
 
+// The bump map's gradient: of the bilinear interpolant, in units of uv, through to_uv.
+TEST(BitmapTexture, GradientOfTheBilinearInterpolant) {
+    auto img = std::make_shared<Image>();
+    img->width = 4;
+    img->height = 2;
+    // h = 0.25 i + 0.5 j at texel (i, j): slopes 0.25 x 4 = 1 per unit u, 0.5 x 2 = 1 per unit v.
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 4; ++i) img->texels.push_back(Rgb(0.25f * float(i) + 0.5f * float(j), 9.f, 9.f));
+    BitmapTexture t;
+    t.image = img;
+    Vec2 g = t.eval_grad({0.5f, 0.5f});
+    EXPECT_NEAR(g.x, 1.f, 1e-5f);
+    EXPECT_NEAR(g.y, 1.f, 1e-5f);
+    t.filter = TexFilter::Nearest;  // still the interpolant's gradient (see eval_grad)
+    EXPECT_NEAR(t.eval_grad({0.5f, 0.5f}).x, 1.f, 1e-5f);
+    t.to_uv.m = {2, 0, 0, 0, 3, 0};  // h(2u, 3v): the chain rule scales the slopes
+    g = t.eval_grad({0.25f, 1.f / 6.f});
+    EXPECT_NEAR(g.x, 2.f, 1e-5f);
+    EXPECT_NEAR(g.y, 3.f, 1e-5f);
+    BitmapTexture c;
+    c.checker = true;
+    EXPECT_EQ(c.eval_grad({0.3f, 0.3f}), (Vec2{0.f, 0.f}));
+}
+
 TEST(BitmapTexture, NonFiniteUvDoesNotReadOutOfRange) {
     auto t = grid2(TexFilter::Bilinear, TexWrap::Repeat);
     Rgb c = t.eval({std::nanf(""), INFINITY});

@@ -22,5 +22,15 @@ const std::vector<std::string> kMask = {"floor", "leaf", "light"};
 TEST(TungstenReference, MaskPath) { compare_with_reference("mask", IntegratorType::Path, 1024, "path", kMask); }
 TEST(TungstenReference, MaskBdpt) { compare_with_reference("mask", IntegratorType::Bdpt, 256, "bdpt", kMask); }
 
+// A Beckmann rough conductor whose specular_reflectance is a checkerboard, on a bump-mapped floor
+// (Mitsuba's bumpmap; the README's least certain mapping: scale and sign of the height slope).
+const std::vector<std::string> kTextured = {"bumped floor", "checker conductor", "light"};
+TEST(TungstenReference, TexturedConductorPath) {
+    compare_with_reference("textured-conductor", IntegratorType::Path, 1024, "path", kTextured);
+}
+TEST(TungstenReference, TexturedConductorBdpt) {
+    compare_with_reference("textured-conductor", IntegratorType::Bdpt, 256, "bdpt", kTextured);
+}
+
 }  // namespace
 }  // namespace omega
