@@ -75,7 +75,8 @@ void expect_same(const SceneDesc& a, const SceneDesc& b) {
             EXPECT_EQ(tx->raw, ty->raw) << name;
             EXPECT_EQ(tx->to_uv.m, ty->to_uv.m) << name;
         }
-        for (auto t : {&MaterialDesc::specular_texture, &MaterialDesc::opacity_texture}) {
+        EXPECT_EQ(m.bump_scale, b.materials.at(name).bump_scale) << name;
+        for (auto t : {&MaterialDesc::specular_texture, &MaterialDesc::opacity_texture, &MaterialDesc::bump_texture}) {
             const auto &sx = m.*t, &sy = b.materials.at(name).*t;
             ASSERT_EQ(sx.has_value(), sy.has_value()) << name;
             if (sx) {
@@ -430,6 +431,13 @@ TEST(MitsubaImporter, CheckerboardAndMaskMapToTexturesAndOpacity) {
 <shape type="rectangle"><ref id="half"/></shape>
 <shape type="rectangle"><ref id="def"/></shape>
 <shape type="rectangle"><ref id="leaf"/></shape>
+<bsdf type="bumpmap" id="bumped"><texture type="bitmap" name="arbitrary"><string name="filename" value="alpha.ppm"/>
+  <boolean name="raw" value="true"/></texture><float name="scale" value="0.08"/>
+  <bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>
+<bsdf type="mask" id="both"><float name="opacity" value="0.9"/><bsdf type="bumpmap"><texture type="checkerboard"/>
+  <bsdf type="roughconductor"/></bsdf></bsdf>
+<shape type="rectangle"><ref id="bumped"/></shape>
+<shape type="rectangle"><ref id="both"/></shape>
 )" + std::string(kLitBox) + "</scene>");
     SceneDesc d = import_mitsuba_file(xml.string());
     ASSERT_EQ(d.warnings.size(), 1u) << all_warnings(d);  // only the missing sensor
@@ -448,6 +456,18 @@ TEST(MitsubaImporter, CheckerboardAndMaskMapToTexturesAndOpacity) {
     ASSERT_TRUE(d.materials.at("leaf").opacity_texture);
     EXPECT_TRUE(d.materials.at("leaf").opacity_texture->raw);
     EXPECT_FALSE(std::get<DiffuseBsdf>(d.materials.at("leaf").bsdf).two_sided);
+    const MaterialDesc& bumped = d.materials.at("bumped");
+    ASSERT_TRUE(bumped.bump_texture);
+    EXPECT_EQ(bumped.bump_texture->file, (dir.path / "alpha.ppm").lexically_normal().string());
+    EXPECT_TRUE(bumped.bump_texture->raw);
+    EXPECT_FLOAT_EQ(bumped.bump_scale, 0.08f);
+    EXPECT_TRUE(std::get<DiffuseBsdf>(bumped.bsdf).two_sided);
+    const MaterialDesc& both = d.materials.at("both");
+    EXPECT_FLOAT_EQ(both.opacity, 0.9f);
+    ASSERT_TRUE(both.bump_texture);
+    EXPECT_TRUE(both.bump_texture->checker);
+    EXPECT_EQ(both.bump_scale, 1.f);  // Mitsuba's default
+    EXPECT_TRUE(std::holds_alternative<ConductorBsdf>(both.bsdf));
     expect_round_trip(d, dir.path.string());
     auto scene = Scene::build(d);
     EXPECT_TRUE(scene->shapes()[4].masked());
