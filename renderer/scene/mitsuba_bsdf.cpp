@@ -60,7 +60,7 @@ YAML::Node Importer::bitmap(pugi::xml_node tex, const std::string& key) {
     if (auto c = find_param(e, "wrap_mode")) y["wrap"] = attr(c, "value", key);
     if (auto c = find_param(e, "raw")) y["raw"] = scalar(c, key);
     if (auto c = find_param(e, "to_uv"))
-        if (YAML::Node t = to_uv(c, key)) y["to_uv"] = t;
+        if (YAML::Node t = to_uv(c, key); t.IsMap()) y["to_uv"] = t;
     // Storage and device details: the same texture values.
     for (const char* ignored : {"format", "accel"})
         if (auto c = find_param(e, ignored)) (void)c;
@@ -74,7 +74,7 @@ YAML::Node Importer::to_uv(pugi::xml_node c, const std::string& key) {
     bool planar = m(0, 2) == 0 && m(1, 2) == 0 && m(2, 0) == 0 && m(2, 1) == 0;
     if (!planar) {
         warn(c, key, "to_uv mixes in the z axis, which a uv map does not have; it was ignored");
-        return YAML::Node();
+        return YAML::Node();  // null: the caller keeps identity
     }
     YAML::Node l(YAML::NodeType::Sequence);
     for (auto [r, col] : {std::pair{0, 0}, {0, 1}, {0, 3}, {1, 0}, {1, 1}, {1, 3}}) l.push_back(fmt::format("{}", m(r, col)));
@@ -91,7 +91,7 @@ YAML::Node Importer::checkerboard(pugi::xml_node tex, const std::string& key) {
     for (const char* p : {"color0", "color1"})
         if (auto c = find_param(e, p)) y[p] = colour(c, key + "." + p);
     if (auto c = find_param(e, "to_uv"))
-        if (YAML::Node t = to_uv(c, key)) y["to_uv"] = t;
+        if (YAML::Node t = to_uv(c, key); t.IsMap()) y["to_uv"] = t;
     warn_unused(e);
     return y;
 }
