@@ -21,6 +21,9 @@ TEST(TungstenReference, ThinGlassBdpt) { compare_with_reference("thin-glass", In
 const std::vector<std::string> kMask = {"floor", "leaf", "light"};
 TEST(TungstenReference, MaskPath) { compare_with_reference("mask", IntegratorType::Path, 1024, "path", kMask); }
 TEST(TungstenReference, MaskBdpt) { compare_with_reference("mask", IntegratorType::Bdpt, 256, "bdpt", kMask); }
+// Light tracing: every camera connection passes the mask's any-hit filter. Pixels that may see the
+// environment are left out (the light tracer does not trace environment emission).
+TEST(TungstenReference, MaskLight) { compare_with_reference("mask", IntegratorType::Light, 256, "light", kMask); }
 
 // A Beckmann rough conductor whose specular_reflectance is a checkerboard, on a bump-mapped floor
 // (Mitsuba's bumpmap; the README's least certain mapping: scale and sign of the height slope).
@@ -31,6 +34,9 @@ TEST(TungstenReference, TexturedConductorPath) {
 TEST(TungstenReference, TexturedConductorBdpt) {
     compare_with_reference("textured-conductor", IntegratorType::Bdpt, 256, "bdpt", kTextured);
 }
+// No light-tracer run here: the conductor's glossy reflection of the environment is out of a
+// light tracer's reach (environment emission is not traced from the light side), so its image is
+// biased low there by design; the bumped floor alone agreed (ratio 1.005 +- 0.005).
 
 }  // namespace
 }  // namespace omega
