@@ -43,26 +43,24 @@ std::optional<BsdfSample> bsdf_sample(const Bsdf& b, const Vec3& wo, float uc, V
         b);
 }
 
-const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
-    if (const auto* p = std::get_if<PlasticBsdf>(&b)) {
-        PlasticBsdf q = *p;
-        q.diffuse_reflectance = q.diffuse_reflectance_tex->eval(uv);
-        q.diffuse_reflectance_tex = nullptr;
-        tmp = q;
-        return tmp;
-    }
-    if (const auto* c = std::get_if<ConductorBsdf>(&b)) {
-        ConductorBsdf q = *c;
-        q.specular_reflectance = q.specular_reflectance_tex->eval(uv);
-        q.specular_reflectance_tex = nullptr;
-        tmp = q;
-        return tmp;
-    }
-    DiffuseBsdf d = std::get<DiffuseBsdf>(b);
-    d.reflectance = d.reflectance_tex->eval(uv);
-    d.reflectance_tex = nullptr;
-    tmp = d;
+namespace {
+// A copy of model m with the textured parameter `value` looked up at uv and the texture dropped.
+template <class T>
+const Bsdf& looked_up(const T& m, Rgb T::*value, const BitmapTexture* T::*tex, Vec2 uv, Bsdf& tmp) {
+    T q = m;
+    q.*value = (q.*tex)->eval(uv);
+    q.*tex = nullptr;
+    tmp = q;
     return tmp;
+}
+}  // namespace
+
+const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
+    if (const auto* p = std::get_if<PlasticBsdf>(&b))
+        return looked_up(*p, &PlasticBsdf::diffuse_reflectance, &PlasticBsdf::diffuse_reflectance_tex, uv, tmp);
+    if (const auto* c = std::get_if<ConductorBsdf>(&b))
+        return looked_up(*c, &ConductorBsdf::specular_reflectance, &ConductorBsdf::specular_reflectance_tex, uv, tmp);
+    return looked_up(std::get<DiffuseBsdf>(b), &DiffuseBsdf::reflectance, &DiffuseBsdf::reflectance_tex, uv, tmp);
 }
 
 uint8_t bsdf_lobes(const Bsdf& b) {

@@ -66,31 +66,21 @@ void expect_same(const SceneDesc& a, const SceneDesc& b) {
     for (const auto& [name, m] : a.materials) {
         ASSERT_TRUE(b.materials.count(name)) << name;
         const Bsdf &x = m.bsdf, &y = b.materials.at(name).bsdf;
-        const auto &tx = m.reflectance_texture, &ty = b.materials.at(name).reflectance_texture;
-        ASSERT_EQ(tx.has_value(), ty.has_value()) << name;
-        if (tx) {
-            EXPECT_EQ(tx->file, ty->file) << name;
-            EXPECT_EQ(tx->filter, ty->filter) << name;
-            EXPECT_EQ(tx->wrap, ty->wrap) << name;
-            EXPECT_EQ(tx->raw, ty->raw) << name;
-            EXPECT_EQ(tx->to_uv.m, ty->to_uv.m) << name;
-        }
         EXPECT_EQ(m.bump_scale, b.materials.at(name).bump_scale) << name;
-        for (auto t : {&MaterialDesc::specular_texture, &MaterialDesc::opacity_texture, &MaterialDesc::bump_texture}) {
-            const auto &sx = m.*t, &sy = b.materials.at(name).*t;
-            ASSERT_EQ(sx.has_value(), sy.has_value()) << name;
-            if (sx) {
-                EXPECT_EQ(sx->file, sy->file) << name;
-                EXPECT_EQ(sx->checker, sy->checker) << name;
-                EXPECT_EQ(sx->color0, sy->color0) << name;
-                EXPECT_EQ(sx->color1, sy->color1) << name;
-                EXPECT_EQ(sx->to_uv.m, sy->to_uv.m) << name;
+        for (auto t : {&MaterialDesc::reflectance_texture, &MaterialDesc::specular_texture, &MaterialDesc::opacity_texture,
+                       &MaterialDesc::bump_texture}) {
+            const auto &tx = m.*t, &ty = b.materials.at(name).*t;
+            ASSERT_EQ(tx.has_value(), ty.has_value()) << name;
+            if (tx) {
+                EXPECT_EQ(tx->file, ty->file) << name;
+                EXPECT_EQ(tx->filter, ty->filter) << name;
+                EXPECT_EQ(tx->wrap, ty->wrap) << name;
+                EXPECT_EQ(tx->raw, ty->raw) << name;
+                EXPECT_EQ(tx->to_uv.m, ty->to_uv.m) << name;
+                EXPECT_EQ(tx->checker, ty->checker) << name;
+                EXPECT_EQ(tx->color0, ty->color0) << name;
+                EXPECT_EQ(tx->color1, ty->color1) << name;
             }
-        }
-        if (tx) {
-            EXPECT_EQ(tx->checker, ty->checker) << name;
-            EXPECT_EQ(tx->color0, ty->color0) << name;
-            EXPECT_EQ(tx->color1, ty->color1) << name;
         }
         EXPECT_EQ(m.opacity, b.materials.at(name).opacity) << name;
         ASSERT_EQ(x.index(), y.index()) << name;

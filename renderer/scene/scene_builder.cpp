@@ -59,25 +59,22 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
     std::unordered_map<std::string, uint32_t> material_index;
     std::map<std::pair<std::string, bool>, std::shared_ptr<const Image>> images;  // (file, raw)
     auto texture_for = [&](const BitmapDesc& bd) -> const BitmapTexture* {
-        if (bd.checker) {
-            auto tex = std::make_unique<BitmapTexture>();
+        auto tex = std::make_unique<BitmapTexture>();
+        tex->to_uv = bd.to_uv;
+        if (bd.checker) {  // procedural: no file
             tex->checker = true;
             tex->color0 = bd.color0;
             tex->color1 = bd.color1;
-            tex->to_uv = bd.to_uv;
-            s->textures_.push_back(std::move(tex));
-            return s->textures_.back().get();
+        } else {
+            auto& img = images[{bd.file, bd.raw}];
+            if (!img) {
+                poll();
+                img = load_image(gate, bd.file, bd.raw, fmt::format("{}: {}: ", where(bd.loc), bd.loc.key), bd.written);
+            }
+            tex->image = img;
+            tex->filter = bd.filter;
+            tex->wrap = bd.wrap;
         }
-        auto& img = images[{bd.file, bd.raw}];
-        if (!img) {
-            poll();
-            img = load_image(gate, bd.file, bd.raw, fmt::format("{}: {}: ", where(bd.loc), bd.loc.key), bd.written);
-        }
-        auto tex = std::make_unique<BitmapTexture>();
-        tex->image = img;
-        tex->filter = bd.filter;
-        tex->wrap = bd.wrap;
-        tex->to_uv = bd.to_uv;
         s->textures_.push_back(std::move(tex));
         return s->textures_.back().get();
     };
