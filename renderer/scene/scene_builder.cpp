@@ -218,6 +218,10 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
             if (sh.mesh.triangle_count() == 0)
                 throw SceneError(fmt::format("{}: {}: the shape has no triangles", where(sd.loc), sh.name));
         }
+        if (sd.emitter && !is_black(sd.emitter->radiance) && sh.masked())
+            // Light sampling picks points by area, holes included: the emission would not match.
+            throw SceneError(fmt::format("{}: {}: a mask (opacity) on an emitting shape is not supported", where(sd.loc),
+                                         sh.name));
         if (sd.emitter && !is_black(sd.emitter->radiance)) {
             sh.light = int32_t(s->lights_.size());
             s->lights_.push_back(AreaLight{uint32_t(i), sd.emitter->radiance, sd.emitter->two_sided});

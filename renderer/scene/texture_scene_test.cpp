@@ -265,6 +265,11 @@ shapes:
                   Scene::build(f.parse("materials: {m: {type: diffuse, opacity: 0.5}}\nshapes: [{type: sphere, material: m}]\n"));
               }).find("sphere"),
               std::string::npos);
+    EXPECT_NE(scene_error_of([&] {
+                  Scene::build(f.parse("materials: {m: {type: diffuse, opacity: 0.5}}\nshapes: [{type: rectangle, material: m, "
+                                       "emitter: {type: area, radiance: 1}}]\n"));
+              }).find("emitting shape"),
+              std::string::npos);
 }
 
 // Mitsuba's bumpmap on a rectangle: a height ramp in u tilts the shading normal by the analytic
