@@ -11,7 +11,8 @@ Rgb bsdf_eval(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode)
     return std::visit(
         [&](const auto& m) -> Rgb {
             using T = std::decay_t<decltype(m)>;
-            if constexpr (std::is_same_v<T, BlackBsdf>) return Rgb(0.f);
+            // Black and thin sheet: no non-delta lobe, hence no density and no value.
+            if constexpr (std::is_same_v<T, BlackBsdf> || std::is_same_v<T, ThinDielectricBsdf>) return Rgb(0.f);
             else if constexpr (std::is_same_v<T, DielectricBsdf>) return eval(m, wo, wi, mode);
             else return eval(m, wo, wi);
         },
@@ -22,7 +23,7 @@ float bsdf_pdf_sa(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode m
     return std::visit(
         [&](const auto& m) -> float {
             using T = std::decay_t<decltype(m)>;
-            if constexpr (std::is_same_v<T, BlackBsdf>) return 0.f;
+            if constexpr (std::is_same_v<T, BlackBsdf> || std::is_same_v<T, ThinDielectricBsdf>) return 0.f;
             else if constexpr (std::is_same_v<T, DielectricBsdf>) return pdf_sa(m, wo, wi, mode);
             else return pdf_sa(m, wo, wi);
         },
@@ -36,24 +37,30 @@ std::optional<BsdfSample> bsdf_sample(const Bsdf& b, const Vec3& wo, float uc, V
             if constexpr (std::is_same_v<T, BlackBsdf>) return std::nullopt;
             else if constexpr (std::is_same_v<T, DielectricBsdf>) return sample(m, wo, uc, u, mode);
             else if constexpr (std::is_same_v<T, PlasticBsdf>) return sample(m, wo, uc, u);
+            else if constexpr (std::is_same_v<T, ThinDielectricBsdf>) return sample(m, wo, uc);
             else return sample(m, wo, u);
         },
         b);
 }
 
-const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
-    if (const auto* p = std::get_if<PlasticBsdf>(&b)) {
-        PlasticBsdf q = *p;
-        q.diffuse_reflectance = q.diffuse_reflectance_tex->eval(uv);
-        q.diffuse_reflectance_tex = nullptr;
-        tmp = q;
-        return tmp;
-    }
-    DiffuseBsdf d = std::get<DiffuseBsdf>(b);
-    d.reflectance = d.reflectance_tex->eval(uv);
-    d.reflectance_tex = nullptr;
-    tmp = d;
+namespace {
+// A copy of model m with the textured parameter `value` looked up at uv and the texture dropped.
+template <class T>
+const Bsdf& looked_up(const T& m, Rgb T::*value, const BitmapTexture* T::*tex, Vec2 uv, Bsdf& tmp) {
+    T q = m;
+    q.*value = (q.*tex)->eval(uv);
+    q.*tex = nullptr;
+    tmp = q;
     return tmp;
+}
+}  // namespace
+
+const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
+    if (const auto* p = std::get_if<PlasticBsdf>(&b))
+        return looked_up(*p, &PlasticBsdf::diffuse_reflectance, &PlasticBsdf::diffuse_reflectance_tex, uv, tmp);
+    if (const auto* c = std::get_if<ConductorBsdf>(&b))
+        return looked_up(*c, &ConductorBsdf::specular_reflectance, &ConductorBsdf::specular_reflectance_tex, uv, tmp);
+    return looked_up(std::get<DiffuseBsdf>(b), &DiffuseBsdf::reflectance, &DiffuseBsdf::reflectance_tex, uv, tmp);
 }
 
 uint8_t bsdf_lobes(const Bsdf& b) {
@@ -68,6 +75,8 @@ uint8_t bsdf_lobes(const Bsdf& b) {
                 // The coat's reflection and the substrate are separate lobes; a path through the
                 // smooth coat's mirror lobe is S, one through the substrate or a rough coat is D.
                 return kLobeReflection | kLobeDiffuse | (m.alpha == 0 ? kLobeDelta : kLobeGlossy);
+            } else if constexpr (std::is_same_v<T, ThinDielectricBsdf>) {
+                return kLobeReflection | kLobeTransmission | kLobeDelta;
             } else if constexpr (std::is_same_v<T, ConductorBsdf>) {
                 bool smooth = m.alpha_u == 0 && m.alpha_v == 0;
                 return kLobeReflection | (smooth ? kLobeDelta : kLobeGlossy);

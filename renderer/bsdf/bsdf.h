@@ -62,6 +62,8 @@ struct ConductorBsdf {
     float alpha_u = 0, alpha_v = 0;
     MicrofacetType distribution = MicrofacetType::GGX;
     bool two_sided = true;
+    // As DiffuseBsdf::reflectance_tex, for specular_reflectance (which then holds the mean).
+    const BitmapTexture* specular_reflectance_tex = nullptr;
 };
 
 // Dielectric interface; eta = int_ior / ext_ior. alpha == 0 is smooth.
@@ -71,6 +73,17 @@ struct DielectricBsdf {
     Rgb specular_transmittance{1.f, 1.f, 1.f};
     float alpha_u = 0, alpha_v = 0;
     MicrofacetType distribution = MicrofacetType::GGX;
+};
+
+// Thin dielectric sheet (a window pane): an infinitely thin slab of relative IOR eta = int_ior /
+// ext_ior with both faces parallel. Specular reflection plus straight-through transmission
+// (wi = -wo, no refraction offset), the slab's internal bounces summed per polarisation as
+// Tungsten's thinsheet does (see thin_dielectric.cpp). Both lobes are delta; the sheet is
+// symmetric, so it looks the same from either side and needs no TransportMode.
+struct ThinDielectricBsdf {
+    float eta = 1.5f;
+    Rgb specular_reflectance{1.f, 1.f, 1.f};
+    Rgb specular_transmittance{1.f, 1.f, 1.f};
 };
 
 // Plastic: a smooth dielectric coat over a Lambertian base (Tungsten's plastic / rough_plastic,
@@ -101,7 +114,7 @@ struct PlasticBsdf {
 // Absorbs everything; used for emitters that should not reflect.
 struct BlackBsdf {};
 
-using Bsdf = std::variant<DiffuseBsdf, ConductorBsdf, DielectricBsdf, PlasticBsdf, BlackBsdf>;
+using Bsdf = std::variant<DiffuseBsdf, ConductorBsdf, DielectricBsdf, PlasticBsdf, ThinDielectricBsdf, BlackBsdf>;
 
 Rgb bsdf_eval(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
 float bsdf_pdf_sa(const Bsdf& b, const Vec3& wo, const Vec3& wi, TransportMode mode);
@@ -123,6 +136,7 @@ const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp);
 inline bool bsdf_is_textured(const Bsdf& b) {
     if (const auto* d = std::get_if<DiffuseBsdf>(&b)) return d->reflectance_tex != nullptr;
     if (const auto* p = std::get_if<PlasticBsdf>(&b)) return p->diffuse_reflectance_tex != nullptr;
+    if (const auto* c = std::get_if<ConductorBsdf>(&b)) return c->specular_reflectance_tex != nullptr;
     return false;
 }
 inline const Bsdf& resolve_bsdf(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
@@ -132,5 +146,11 @@ inline const Bsdf& resolve_bsdf(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
 // Hemispherical average of the dielectric Fresnel reflectance seen from inside a medium of
 // relative index eta (int_ior / ext_ior): 2 ∫_0^1 F_int(mu) mu dmu, by quadrature in double.
 float plastic_fdr_int(float eta);
+
+// Reflectance of a thin slab of relative IOR eta at incidence |cos_i|, with the incoherent sum
+// over the slab's internal bounces taken per polarisation and then averaged (Tungsten's
+// Fresnel::thinFilmReflectance): R' = (2 Rs/(1 + Rs) + 2 Rp/(1 + Rp)) / 2. Its transmittance is
+// 1 - R' (no absorption).
+float thin_slab_reflectance(float cos_i, float eta);
 
 }  // namespace omega

@@ -282,6 +282,71 @@ TEST(BsdfProperties, SmoothDielectricDiscreteProbabilitiesAndWeights) {
     EXPECT_TRUE(bsdf_is_delta_only(glass));
 }
 
+// Thin sheet (thin_dielectric.cpp): both lobes delta, chosen with the discrete probabilities R'
+// and 1 - R', weights Ks and Kt, the same from both sides and in both transport modes.
+TEST(ThinDielectricBsdf, DiscreteProbabilitiesWeightsAndSymmetry) {
+    ThinDielectricBsdf pane{1.5f, {0.9f, 0.8f, 0.7f}, {0.6f, 0.5f, 0.4f}};
+    // Tungsten's thinFilmReflectance (per-polarisation sum), by hand: at normal incidence
+    // r = 0.04, R' = 2r/(1 + r) = 0.0769231; at 45 deg 0.0927, at 60 deg 0.1519
+    // (../shared/scenes/materials/README.md).
+    EXPECT_NEAR(thin_slab_reflectance(1.f, 1.5f), 0.08f / 1.04f, 1e-6f);
+    EXPECT_NEAR(thin_slab_reflectance(std::sqrt(0.5f), 1.5f), 0.0927f, 1e-4f);
+    EXPECT_NEAR(thin_slab_reflectance(0.5f, 1.5f), 0.1519f, 1e-4f);
+    EXPECT_EQ(thin_slab_reflectance(0.3f, 1.f), 0.f);
+    EXPECT_EQ(thin_slab_reflectance(0.1f, 0.7f), 1.f);  // eta < 1: total internal reflection
+    EXPECT_NEAR(thin_slab_reflectance(1e-6f, 1.5f), 1.f, 1e-4f);  // grazing: a mirror
+    for (float c : {1.f, 0.7f, 0.2f, 0.01f, -0.9f, -0.3f, -0.01f}) {
+        Vec3 wo = dir(c, 0.9f);
+        float r = thin_slab_reflectance(c, pane.eta);
+        EXPECT_EQ(r, thin_slab_reflectance(-c, pane.eta));  // symmetric sheet
+        const int n = 100000;
+        Rng rng(52, 0);
+        int n_refl = 0;
+        for (int i = 0; i < n; ++i) {
+            float uc = rng.next_1d();
+            Vec2 u = next_2d(rng);
+            auto s = bsdf_sample(pane, wo, uc, u, kRad);
+            auto si = bsdf_sample(pane, wo, uc, u, kImp);
+            ASSERT_TRUE(s && si);
+            // Adjoint: no medium change, so no 1/eta^2 and the same sample in both modes.
+            ASSERT_EQ(s->weight, si->weight);
+            ASSERT_EQ(s->wi, si->wi);
+            ASSERT_TRUE(s->is_delta());
+            ASSERT_EQ(s->eta, 1.f);
+            // Nothing of it has a density: the connections of BDPT and NEE see 0.
+            ASSERT_EQ(bsdf_eval(pane, wo, s->wi, kRad), Rgb(0.f));
+            ASSERT_EQ(bsdf_pdf_sa(pane, wo, s->wi, kRad), 0.f);
+            if (s->lobe & kLobeReflection) {
+                ++n_refl;
+                ASSERT_EQ(s->pdf_sa, r);  // discrete probability
+                ASSERT_EQ(s->weight, pane.specular_reflectance);
+                ASSERT_EQ(s->wi, Vec3(-wo.x, -wo.y, wo.z));
+            } else {
+                ASSERT_TRUE(s->lobe & kLobeTransmission);
+                ASSERT_NEAR(s->pdf_sa, 1 - r, 1e-7f);
+                ASSERT_EQ(s->weight, pane.specular_transmittance);
+                ASSERT_EQ(s->wi, -wo);  // straight through, no refraction offset
+            }
+            // Reverse discrete probability (pdf_rev): sampling back from wi picks the same lobe
+            // with the same probability, since |wi.z| = |wo.z|.
+            auto back = bsdf_sample(pane, s->wi, uc, u, kRad);
+            ASSERT_TRUE(back);
+            ASSERT_EQ(back->pdf_sa, s->pdf_sa);
+            ASSERT_EQ(back->wi, wo);
+        }
+        double sd = std::sqrt(n * r * (1 - r)) + 0.5;
+        EXPECT_NEAR(n_refl, n * r, 5 * sd) << "cos " << c;
+        // Energy: the expected weight with white tints is R' + (1 - R') = 1, nothing absorbed.
+    }
+    ThinDielectricBsdf white;
+    Rng rng(53, 0);
+    double sum = 0;
+    for (int i = 0; i < 10000; ++i) sum += bsdf_sample(white, dir(0.4f, 0.f), rng.next_1d(), {0, 0}, kRad)->weight.x;
+    EXPECT_EQ(sum, 10000.0);
+    EXPECT_TRUE(bsdf_is_delta_only(white));
+    EXPECT_EQ(bsdf_lobes(white), kLobeReflection | kLobeTransmission | kLobeDelta);
+}
+
 TEST(BsdfProperties, NoNanOrInfAnywhere) {
     std::vector<Named> models = rough_models();
     for (float a : {1e-4f, 1e-2f, 1.f}) {
@@ -303,6 +368,8 @@ TEST(BsdfProperties, NoNanOrInfAnywhere) {
                           return p;
                       }()});
     models.push_back({"smooth_diel", DielectricBsdf{}});
+    models.push_back({"thin_diel", ThinDielectricBsdf{}});
+    models.push_back({"thin_diel_eta_lt_1", ThinDielectricBsdf{0.7f, {1, 1, 1}, {1, 1, 1}}});
     models.push_back({"smooth_cond", ConductorBsdf{}});
     models.push_back({"black", BlackBsdf{}});
     const float cosines[] = {0.f, 1e-7f, -1e-7f, 1e-4f, -1e-4f, 0.01f, -0.01f, 1.f, -1.f};

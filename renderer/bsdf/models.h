@@ -22,4 +22,8 @@ Rgb eval(const PlasticBsdf& b, const Vec3& wo, const Vec3& wi);
 float pdf_sa(const PlasticBsdf& b, const Vec3& wo, const Vec3& wi);
 std::optional<BsdfSample> sample(const PlasticBsdf& b, const Vec3& wo, float uc, Vec2 u);
 
+// Thin sheet: only delta lobes (eval and pdf_sa are 0 everywhere); reciprocal and without
+// refraction, so the importance BSDF equals the radiance one.
+std::optional<BsdfSample> sample(const ThinDielectricBsdf& b, const Vec3& wo, float uc);
+
 }  // namespace omega

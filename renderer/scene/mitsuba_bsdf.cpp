@@ -40,7 +40,8 @@ Rgb Importer::texture_average(pugi::xml_node tex, const std::string& key) {
     Rgb avg{float(sum[0] / double(n)), float(sum[1] / double(n)), float(sum[2] / double(n))};
     for (int ch = 0; ch < 3; ++ch) avg[ch] = std::clamp(avg[ch], 0.f, 1.f);
     warn(tex, key,
-         fmt::format("bitmap '{}': Omega textures only a diffuse reflectance; using its average colour [{:.4g}, {:.4g}, "
+         fmt::format("bitmap '{}': this parameter takes no texture in Omega (a diffuse or plastic reflectance, a "
+                     "conductor's specular_reflectance, a mask's opacity do); using its average colour [{:.4g}, {:.4g}, "
                      "{:.4g}]{}",
                      file, avg.x, avg.y, avg.z, srgb ? " (sRGB-decoded)" : ""));
     return avg;
@@ -58,23 +59,39 @@ YAML::Node Importer::bitmap(pugi::xml_node tex, const std::string& key) {
     if (auto c = find_param(e, "filter_type")) y["filter"] = attr(c, "value", key);
     if (auto c = find_param(e, "wrap_mode")) y["wrap"] = attr(c, "value", key);
     if (auto c = find_param(e, "raw")) y["raw"] = scalar(c, key);
-    if (auto c = find_param(e, "to_uv")) {
-        // Mitsuba reads to_uv as the 2D affine part (rows and columns x, y, w) of the 4x4 it builds.
-        Mat4 m = to_world(c, key + ".to_uv");
-        bool planar = m(0, 2) == 0 && m(1, 2) == 0 && m(2, 0) == 0 && m(2, 1) == 0;
-        if (planar) {
-            YAML::Node l(YAML::NodeType::Sequence);
-            for (auto [r, col] : {std::pair{0, 0}, {0, 1}, {0, 3}, {1, 0}, {1, 1}, {1, 3}}) l.push_back(fmt::format("{}", m(r, col)));
-            YAML::Node op(YAML::NodeType::Map);
-            op["matrix"] = l;
-            y["to_uv"] = op;
-        } else {
-            warn(c, key, "to_uv mixes in the z axis, which a uv map does not have; it was ignored");
-        }
-    }
+    if (auto c = find_param(e, "to_uv"))
+        if (YAML::Node t = to_uv(c, key); t.IsMap()) y["to_uv"] = t;
     // Storage and device details: the same texture values.
     for (const char* ignored : {"format", "accel"})
         if (auto c = find_param(e, ignored)) (void)c;
+    warn_unused(e);
+    return y;
+}
+
+YAML::Node Importer::to_uv(pugi::xml_node c, const std::string& key) {
+    // Mitsuba reads to_uv as the 2D affine part (rows and columns x, y, w) of the 4x4 it builds.
+    Mat4 m = to_world(c, key + ".to_uv");
+    bool planar = m(0, 2) == 0 && m(1, 2) == 0 && m(2, 0) == 0 && m(2, 1) == 0;
+    if (!planar) {
+        warn(c, key, "to_uv mixes in the z axis, which a uv map does not have; it was ignored");
+        return YAML::Node();  // null: the caller keeps identity
+    }
+    YAML::Node l(YAML::NodeType::Sequence);
+    for (auto [r, col] : {std::pair{0, 0}, {0, 1}, {0, 3}, {1, 0}, {1, 1}, {1, 3}}) l.push_back(fmt::format("{}", m(r, col)));
+    YAML::Node op(YAML::NodeType::Map);
+    op["matrix"] = l;
+    return op;
+}
+
+// Mitsuba's checkerboard (3 and 0.6: color0, color1, to_uv; defaults 0.4 and 0.2).
+YAML::Node Importer::checkerboard(pugi::xml_node tex, const std::string& key) {
+    Elem e{tex, key, {}};
+    YAML::Node y(YAML::NodeType::Map);
+    y["type"] = "checkerboard";
+    for (const char* p : {"color0", "color1"})
+        if (auto c = find_param(e, p)) y[p] = colour(c, key + "." + p);
+    if (auto c = find_param(e, "to_uv"))
+        if (YAML::Node t = to_uv(c, key); t.IsMap()) y["to_uv"] = t;
     warn_unused(e);
     return y;
 }
@@ -86,6 +103,7 @@ YAML::Node Importer::colour(pugi::xml_node c, const std::string& key, bool textu
         tag = c.name();
     }
     if (tag == "texture" && texture_ok && attr(c, "type", key) == "bitmap") return bitmap(c, key);
+    if (tag == "texture" && texture_ok && attr(c, "type", key) == "checkerboard") return checkerboard(c, key);
     if (tag == "texture") {
         Rgb a = texture_average(c, key);
         return list3(fmt::format("{}", a.x), fmt::format("{}", a.y), fmt::format("{}", a.z));
@@ -198,7 +216,7 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         }
         put_colour("eta", "eta");
         put_colour("k", "k");
-        put_colour("specular_reflectance", "specular_reflectance");
+        put_colour("specular_reflectance", "specular_reflectance", true);
         y["two_sided"] = two_sided;
     };
 
@@ -212,6 +230,46 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         for (pugi::xml_node c : n.children()) e.use(c);
         return read_bsdf(inner, key, true, lines);
     }
+    if (type == "mask") {
+        // Mitsuba's mask: the nested BSDF with probability `opacity` (default 0.5 in 3 and 0.6),
+        // a pass-through otherwise; Omega keeps the opacity on the material (Scene::intersect).
+        pugi::xml_node inner = nested();
+        if (!inner) fail(n, key, "mask needs a nested <bsdf>");
+        pugi::xml_node op = find_param(e, "opacity");
+        warn_unused(e);
+        y = read_bsdf(inner, key, two_sided, lines);
+        if (static_cast<const YAML::Node&>(y)["opacity"]) fail(n, key, "nested masks are not supported");
+        y["opacity"] = op ? colour(op, key + ".opacity", true) : YAML::Node("0.5");
+        if (op) lines["opacity"] = line_of(op);
+        return y;
+    }
+    if (type == "bumpmap") {
+        // Mitsuba's bumpmap (3 and 0.6): a nested height texture of any name (the first), `scale`
+        // (default 1), and the nested BSDF shaded with the tilted normal.
+        pugi::xml_node inner = nested();
+        if (!inner) fail(n, key, "bumpmap needs a nested <bsdf>");
+        pugi::xml_node tex;
+        for (pugi::xml_node c : n.children()) {
+            std::string t = c.name();
+            pugi::xml_node r = t == "ref" ? resolve_ref(c, key) : c;
+            if (std::string(r.name()) == "texture" && !tex) {
+                e.use(c);
+                tex = r;
+            }
+        }
+        if (!tex) fail(n, key, "bumpmap needs a nested height <texture>");
+        pugi::xml_node sc = find_param(e, "scale");
+        warn_unused(e);
+        y = read_bsdf(inner, key, two_sided, lines);
+        if (static_cast<const YAML::Node&>(y)["bump"]) fail(n, key, "nested bump maps are not supported");
+        std::string ttype = attr(tex, "type", key);
+        if (ttype == "bitmap") y["bump"] = bitmap(tex, key + ".height");
+        else if (ttype == "checkerboard") y["bump"] = checkerboard(tex, key + ".height");
+        else fail(tex, key, "a bumpmap height texture of type '" + ttype + "' is not supported (bitmap, checkerboard)");
+        y["bump_scale"] = sc ? scalar(sc, key) : YAML::Node("1");
+        if (sc) lines["bump_scale"] = line_of(sc);
+        return y;
+    }
     if (type == "diffuse") {
         y["type"] = "diffuse";
         put_colour("reflectance", "reflectance", true);
@@ -222,9 +280,8 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         put_conductor();
         put_alpha("0.1");
     } else if (type == "dielectric" || type == "roughdielectric" || type == "thindielectric") {
-        y["type"] = "dielectric";
-        if (type == "thindielectric")
-            warn(n, key, "thindielectric is approximated by a dielectric interface (the shape is treated as solid glass)");
+        // Mitsuba 3 and 0.6 share the parameters and defaults (BK7 in air, Ks = Kt = 1).
+        y["type"] = type == "thindielectric" ? "thindielectric" : "dielectric";
         for (const char* p : {"int_ior", "ext_ior"}) put(p, p);
         put_colour("specular_reflectance", "specular_reflectance");
         put_colour("specular_transmittance", "specular_transmittance");

@@ -177,6 +177,9 @@ private:
     YAML::Node colour(pugi::xml_node c, const std::string& key, bool texture_ok = false);
     Rgb texture_average(pugi::xml_node tex, const std::string& key);
     YAML::Node bitmap(pugi::xml_node tex, const std::string& key);
+    YAML::Node checkerboard(pugi::xml_node tex, const std::string& key);
+    // A <transform name="to_uv"> as a v1 uv transform; null (with a warning) when it mixes in z.
+    YAML::Node to_uv(pugi::xml_node c, const std::string& key);
 
     // ---- transforms
     YAML::Node transform_ops(pugi::xml_node t, const std::string& key);

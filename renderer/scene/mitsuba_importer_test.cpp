@@ -66,15 +66,23 @@ void expect_same(const SceneDesc& a, const SceneDesc& b) {
     for (const auto& [name, m] : a.materials) {
         ASSERT_TRUE(b.materials.count(name)) << name;
         const Bsdf &x = m.bsdf, &y = b.materials.at(name).bsdf;
-        const auto &tx = m.reflectance_texture, &ty = b.materials.at(name).reflectance_texture;
-        ASSERT_EQ(tx.has_value(), ty.has_value()) << name;
-        if (tx) {
-            EXPECT_EQ(tx->file, ty->file) << name;
-            EXPECT_EQ(tx->filter, ty->filter) << name;
-            EXPECT_EQ(tx->wrap, ty->wrap) << name;
-            EXPECT_EQ(tx->raw, ty->raw) << name;
-            EXPECT_EQ(tx->to_uv.m, ty->to_uv.m) << name;
+        EXPECT_EQ(m.bump_scale, b.materials.at(name).bump_scale) << name;
+        for (auto t : {&MaterialDesc::reflectance_texture, &MaterialDesc::specular_texture, &MaterialDesc::opacity_texture,
+                       &MaterialDesc::bump_texture}) {
+            const auto &tx = m.*t, &ty = b.materials.at(name).*t;
+            ASSERT_EQ(tx.has_value(), ty.has_value()) << name;
+            if (tx) {
+                EXPECT_EQ(tx->file, ty->file) << name;
+                EXPECT_EQ(tx->filter, ty->filter) << name;
+                EXPECT_EQ(tx->wrap, ty->wrap) << name;
+                EXPECT_EQ(tx->raw, ty->raw) << name;
+                EXPECT_EQ(tx->to_uv.m, ty->to_uv.m) << name;
+                EXPECT_EQ(tx->checker, ty->checker) << name;
+                EXPECT_EQ(tx->color0, ty->color0) << name;
+                EXPECT_EQ(tx->color1, ty->color1) << name;
+            }
         }
+        EXPECT_EQ(m.opacity, b.materials.at(name).opacity) << name;
         ASSERT_EQ(x.index(), y.index()) << name;
         if (auto* d = std::get_if<DiffuseBsdf>(&x)) {
             auto* e = std::get_if<DiffuseBsdf>(&y);
@@ -393,6 +401,95 @@ TEST(MitsubaImporter, MaterialsMapToOmegaBsdfs) {
     expect_round_trip(d);
 }
 
+// checkerboard on a diffuse reflectance and a conductor's specular_reflectance, and mask with a
+// constant, a default and a bitmap opacity, wrapped either way round with twosided.
+TEST(MitsubaImporter, CheckerboardAndMaskMapToTexturesAndOpacity) {
+    TempDir dir;
+    dir.write("alpha.ppm", std::string("P6\n2 1\n255\n") + std::string("\xff\xff\xff\x00\x00\x00", 6));
+    auto xml = dir.write("scene.xml", R"(<scene version="3.0.0">
+<bsdf type="diffuse" id="wall"><texture type="checkerboard" name="reflectance">
+  <rgb name="color0" value="0.8, 0.8, 0.8"/><rgb name="color1" value="0.1, 0.1, 0.15"/>
+  <transform name="to_uv"><scale x="4" y="4"/></transform></texture></bsdf>
+<bsdf type="roughconductor" id="metal"><texture type="checkerboard" name="specular_reflectance">
+  <float name="color0" value="1"/><float name="color1" value="0.25"/></texture></bsdf>
+<bsdf type="mask" id="half"><float name="opacity" value="0.3"/><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>
+<bsdf type="twosided" id="def"><bsdf type="mask"><bsdf type="diffuse"/></bsdf></bsdf>
+<bsdf type="mask" id="leaf"><texture type="bitmap" name="opacity"><string name="filename" value="alpha.ppm"/>
+  <boolean name="raw" value="true"/></texture><bsdf type="diffuse"/></bsdf>
+<shape type="rectangle"><ref id="wall"/></shape>
+<shape type="sphere"><ref id="metal"/></shape>
+<shape type="rectangle"><ref id="half"/></shape>
+<shape type="rectangle"><ref id="def"/></shape>
+<shape type="rectangle"><ref id="leaf"/></shape>
+<bsdf type="bumpmap" id="bumped"><texture type="bitmap" name="arbitrary"><string name="filename" value="alpha.ppm"/>
+  <boolean name="raw" value="true"/></texture><float name="scale" value="0.08"/>
+  <bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>
+<bsdf type="mask" id="both"><float name="opacity" value="0.9"/><bsdf type="bumpmap"><texture type="checkerboard"/>
+  <bsdf type="roughconductor"/></bsdf></bsdf>
+<shape type="rectangle"><ref id="bumped"/></shape>
+<shape type="rectangle"><ref id="both"/></shape>
+)" + std::string(kLitBox) + "</scene>");
+    SceneDesc d = import_mitsuba_file(xml.string());
+    ASSERT_EQ(d.warnings.size(), 1u) << all_warnings(d);  // only the missing sensor
+    const auto& wall = *d.materials.at("wall").reflectance_texture;
+    EXPECT_TRUE(wall.checker);
+    EXPECT_EQ(wall.color1, (Rgb{0.1f, 0.1f, 0.15f}));
+    EXPECT_EQ(wall.to_uv.m, (std::array<float, 6>{4, 0, 0, 0, 4, 0}));
+    const auto& metal = *d.materials.at("metal").specular_texture;
+    EXPECT_TRUE(metal.checker);
+    EXPECT_EQ(metal.color0, Rgb(1.f));
+    EXPECT_EQ(metal.color1, Rgb(0.25f));
+    EXPECT_FLOAT_EQ(d.materials.at("half").opacity, 0.3f);
+    EXPECT_TRUE(std::get<DiffuseBsdf>(d.materials.at("half").bsdf).two_sided);
+    EXPECT_FLOAT_EQ(d.materials.at("def").opacity, 0.5f);  // Mitsuba's default
+    EXPECT_TRUE(std::get<DiffuseBsdf>(d.materials.at("def").bsdf).two_sided);
+    ASSERT_TRUE(d.materials.at("leaf").opacity_texture);
+    EXPECT_TRUE(d.materials.at("leaf").opacity_texture->raw);
+    EXPECT_FALSE(std::get<DiffuseBsdf>(d.materials.at("leaf").bsdf).two_sided);
+    const MaterialDesc& bumped = d.materials.at("bumped");
+    ASSERT_TRUE(bumped.bump_texture);
+    EXPECT_EQ(bumped.bump_texture->file, (dir.path / "alpha.ppm").lexically_normal().string());
+    EXPECT_TRUE(bumped.bump_texture->raw);
+    EXPECT_FLOAT_EQ(bumped.bump_scale, 0.08f);
+    EXPECT_TRUE(std::get<DiffuseBsdf>(bumped.bsdf).two_sided);
+    const MaterialDesc& both = d.materials.at("both");
+    EXPECT_FLOAT_EQ(both.opacity, 0.9f);
+    ASSERT_TRUE(both.bump_texture);
+    EXPECT_TRUE(both.bump_texture->checker);
+    EXPECT_EQ(both.bump_scale, 1.f);  // Mitsuba's default
+    EXPECT_TRUE(std::holds_alternative<ConductorBsdf>(both.bsdf));
+    expect_round_trip(d, dir.path.string());
+    auto scene = Scene::build(d);
+    EXPECT_TRUE(scene->shapes()[4].masked());
+    EXPECT_FALSE(scene->shapes()[0].masked());
+}
+
+// Both syntaxes (0.6's camelCase too), Mitsuba's defaults (BK7 in air) when nothing is given.
+TEST(MitsubaImporter, ThinDielectricMapsToTheThinSheet) {
+    SceneDesc d = import(R"(
+<bsdf type="thindielectric" id="def"/>
+<bsdf type="thindielectric" id="pane"><float name="int_ior" value="1.5"/><float name="ext_ior" value="1.0"/>
+  <rgb name="specular_transmittance" value="0.9, 0.8, 0.7"/><rgb name="specular_reflectance" value="0.5"/></bsdf>
+<shape type="rectangle"><ref id="def"/></shape>
+<shape type="rectangle"><ref id="pane"/></shape>
+)" + std::string(kLitBox));
+    const auto& def = std::get<ThinDielectricBsdf>(d.materials.at("def").bsdf);
+    EXPECT_FLOAT_EQ(def.eta, 1.5046f / 1.000277f);
+    expect_rgb(def.specular_reflectance, 1.f, 1.f, 1.f);
+    expect_rgb(def.specular_transmittance, 1.f, 1.f, 1.f);
+    const auto& pane = std::get<ThinDielectricBsdf>(d.materials.at("pane").bsdf);
+    EXPECT_FLOAT_EQ(pane.eta, 1.5f);
+    expect_rgb(pane.specular_reflectance, 0.5f, 0.5f, 0.5f);
+    expect_rgb(pane.specular_transmittance, 0.9f, 0.8f, 0.7f);
+    ASSERT_EQ(d.warnings.size(), 1u) << all_warnings(d);  // only the missing sensor
+    expect_round_trip(d);
+
+    SceneDesc legacy = import_mitsuba_string(R"(<scene version="0.6.0">
+<bsdf type="thindielectric" id="pane"><float name="intIOR" value="1.33"/><float name="extIOR" value="1"/></bsdf>
+<shape type="rectangle"><ref id="pane"/></shape></scene>)", "scene.xml");
+    EXPECT_FLOAT_EQ(std::get<ThinDielectricBsdf>(legacy.materials.at("pane").bsdf).eta, 1.33f);
+}
+
 // Both syntaxes, Mitsuba's defaults written out (Omega's own differ: ggx), parameters by name.
 TEST(MitsubaImporter, PlasticMapsToTheCoatedBsdf) {
     SceneDesc d = import(R"(
@@ -536,6 +633,7 @@ TEST(MitsubaImporter, BitmapMapsToATexture) {
 <bsdf type="diffuse" id="byref"><ref name="reflectance" id="t"/></bsdf>
 <bsdf type="plastic" id="plastic"><ref name="diffuse_reflectance" id="t"/></bsdf>
 <bsdf type="conductor" id="metal"><ref name="specular_reflectance" id="t"/></bsdf>
+<bsdf type="plastic" id="coat"><ref name="specular_reflectance" id="t"/></bsdf>
 <bsdf type="diffuse" id="spun"><texture type="bitmap" name="reflectance"><string name="filename" value="tex.ppm"/>
   <transform name="to_uv"><rotate x="1" angle="30"/></transform></texture></bsdf>
 <shape type="cube"><ref id="inline"/></shape>
@@ -544,6 +642,7 @@ TEST(MitsubaImporter, BitmapMapsToATexture) {
 <shape type="cube"><ref id="metal"/></shape>
 <shape type="cube"><ref id="spun"/></shape>
 <shape type="obj"><string name="filename" value="tri.obj"/><boolean name="flip_tex_coords" value="false"/></shape>
+<shape type="cube"><ref id="coat"/></shape>
 )" + std::string(kLitBox) + "</scene>");
     dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
     SceneDesc d = import_mitsuba_file(xml.string());
@@ -570,9 +669,14 @@ TEST(MitsubaImporter, BitmapMapsToATexture) {
     EXPECT_FALSE(has_warning(d, "bsdf(byref).reflectance: bitmap")) << all_warnings(d);
     EXPECT_TRUE(has_warning(d, "scene.xml:7: bsdf(inline).reflectance: parameter 'bogus' (<float>) is not supported"))
         << all_warnings(d);
-    EXPECT_TRUE(has_warning(d, "bsdf(metal).specular_reflectance: bitmap 'tex.ppm': Omega textures only a diffuse "
-                               "reflectance; using its average colour [0.5, 0, 0]"))
+    // A conductor's specular_reflectance is textured too now.
+    ASSERT_TRUE(d.materials.at("metal").specular_texture);
+    EXPECT_EQ(d.materials.at("metal").specular_texture->file, file);
+    EXPECT_FALSE(has_warning(d, "bsdf(metal)")) << all_warnings(d);
+    EXPECT_TRUE(has_warning(d, "bsdf(coat).specular_reflectance: bitmap 'tex.ppm': this parameter takes no texture "
+                               "in Omega"))
         << all_warnings(d);
+    EXPECT_TRUE(has_warning(d, "using its average colour [0.5, 0, 0]")) << all_warnings(d);
     EXPECT_TRUE(has_warning(d, "bsdf(spun).reflectance: to_uv mixes in the z axis")) << all_warnings(d);
     EXPECT_TRUE(d.materials.at("spun").reflectance_texture->to_uv.is_identity());
     expect_round_trip(d, dir.path.string());
@@ -592,8 +696,7 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
 <bsdf type="thindielectric" id="thin"/>
 <bsdf type="null" id="n"/>
 <bsdf type="hair" id="h"/>
-<bsdf type="bumpmap" id="bump"><texture type="bitmap" name="arbitrary"><string name="filename" value="x.png"/></texture>
-  <bsdf type="diffuse"/></bsdf>
+<bsdf type="blendbsdf" id="bump"><float name="weight" value="0.5"/><bsdf type="diffuse"/></bsdf>
 <bsdf type="diffuse" id="extra"><float name="roughness" value="0.5"/></bsdf>
 <bsdf type="diffuse" id="unused"/>
 <shape type="cube"><ref id="p"/></shape>
@@ -622,10 +725,9 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
         "sensor.film.rfilter: reconstruction filter 'mitchell' is not supported",
         "medium: <medium type=\"homogeneous\"> is not supported and was ignored",
         "include: <include> is not supported and was ignored",
-        "bsdf(thin): thindielectric is approximated by a dielectric",
         "bsdf(n): the null BSDF",
         "bsdf(h): BSDF 'hair' is not supported; using a grey diffuse",
-        "bsdf(bump): BSDF 'bumpmap' is not supported; using its nested BSDF",
+        "bsdf(bump): BSDF 'blendbsdf' is not supported; using its nested BSDF",
         "bsdf(extra): parameter 'roughness' (<float>) is not supported",
         "bsdf(unused): never used by any shape",
         "shape[6]: parameter 'interior' (<ref>) is not supported and was ignored",
@@ -641,7 +743,7 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
     // Plastic is supported now: no warning, and the coat is kept.
     expect_rgb(std::get<PlasticBsdf>(d.materials.at("p").bsdf).diffuse_reflectance, 0.2f, 0.2f, 0.2f);
     EXPECT_GT(std::get<PlasticBsdf>(d.materials.at("rp").bsdf).alpha, 0.f);
-    EXPECT_TRUE(std::holds_alternative<DielectricBsdf>(d.materials.at("thin").bsdf));
+    EXPECT_TRUE(std::holds_alternative<ThinDielectricBsdf>(d.materials.at("thin").bsdf));  // supported now
     EXPECT_TRUE(std::holds_alternative<BlackBsdf>(d.materials.at("n").bsdf));
     EXPECT_EQ(d.integrator.type, IntegratorType::Path);
     EXPECT_EQ(d.sensor.halt.spp, 16);

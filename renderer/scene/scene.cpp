@@ -58,7 +58,96 @@ Vec2 triangle_uv(const Shape& sh, uint32_t i0, uint32_t i1, uint32_t i2, float b
     return sh.uv_map == UvMap::Disk ? disk_uv(uv) : uv;
 }
 
+// A uniform number in [0, 1) from the ray and the primitive it hits: the mask's coin. Any query
+// of the same ray against the same triangle gets the same answer (renders stay deterministic
+// and independent of thread timing), while different rays, whose origins and directions are
+// continuous random variables of the path sampling, get independent-looking coins.
+float mask_coin(const float o[3], const float d[3], uint32_t geom, uint32_t prim) {
+    auto mix = [](uint64_t h) {  // splitmix64's finaliser
+        h ^= h >> 30;
+        h *= 0xbf58476d1ce4e5b9ull;
+        h ^= h >> 27;
+        h *= 0x94d049bb133111ebull;
+        return h ^ (h >> 31);
+    };
+    uint64_t h = mix((uint64_t(geom) << 32) | prim);
+    for (int k = 0; k < 3; ++k) {
+        h = mix(h ^ std::bit_cast<uint32_t>(o[k]));
+        h = mix(h ^ (uint64_t(std::bit_cast<uint32_t>(d[k])) << 17));
+    }
+    return float(h >> 40) * 0x1p-24f;
+}
+
+// Geometry filter of a masked triangle shape, for closest-hit and any-hit queries alike, so
+// camera rays, walks, shadow rays and BDPT connections all see the same mask: a hit is kept with
+// probability opacity(uv). A dropped hit is not a surface at all (no vertex, no density): the
+// traversal just goes on behind it. Stochastic pass-through is unbiased for fractional opacity
+// (bilinear edges of a binary mask): a walk passes with probability 1 - a and scatters with
+// probability a, the factors of the measurement contribution a f and transmittance 1 - a, so
+// both cancel; and since no strategy's density includes them, the MIS weights of all strategies
+// are computed alike and still sum to one.
+void mask_filter(const RTCFilterFunctionNArguments* args) {
+    const auto* sh = static_cast<const Shape*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] == 0) continue;
+        uint32_t prim = RTCHitN_primID(args->hit, args->N, i);
+        float b1 = std::clamp(RTCHitN_u(args->hit, args->N, i), 0.f, 1.f);
+        float b2 = std::clamp(RTCHitN_v(args->hit, args->N, i), 0.f, 1.f);
+        float opacity = sh->opacity;
+        if (sh->opacity_tex) {
+            const auto& m = sh->mesh;
+            uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
+            opacity = sh->opacity_tex->eval(triangle_uv(*sh, i0, i1, i2, 1.f - b1 - b2, b1, b2)).x;
+        }
+        if (opacity >= 1.f) continue;
+        if (opacity > 0.f) {
+            float o[3] = {RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
+                          RTCRayN_org_z(args->ray, args->N, i)};
+            float d[3] = {RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
+                          RTCRayN_dir_z(args->ray, args->N, i)};
+            if (mask_coin(o, d, RTCHitN_geomID(args->hit, args->N, i), prim) < opacity) continue;
+        }
+        args->valid[i] = 0;
+    }
+}
+
+// Mitsuba's bumpmap (bumpmap.cpp): with g = scale * grad_uv(height), the tangents become
+// dp/du' = dp/du + n (g_u - n.dp/du) and likewise for v; the shading normal is their cross
+// product, turned to the geometric normal's side. dp/du, dp/dv are the triangle's own, from its
+// positions and uvs (a rectangle's dp/du is to_world (2, 0, 0), as Mitsuba's). The nested BSDF
+// is then shaded in the tilted frame, and the walks' shading-normal correction (subpath.cpp,
+// Veach's adjoint for shading normals) applies to it as to interpolated normals.
+void apply_bump(const Shape& sh, uint32_t i0, uint32_t i1, uint32_t i2, SurfaceHit& hit) {
+    const auto& m = sh.mesh;
+    Vec2 t0{0, 0}, t1{1, 0}, t2{0, 1};  // no uvs: the barycentrics are the uvs (triangle_uv)
+    if (!m.uvs.empty()) {
+        t0 = m.uvs[i0];
+        t1 = m.uvs[i1];
+        t2 = m.uvs[i2];
+    }
+    Vec3 dp1 = m.positions[i1] - m.positions[i0], dp2 = m.positions[i2] - m.positions[i0];
+    float d1u = t1.x - t0.x, d1v = t1.y - t0.y, d2u = t2.x - t0.x, d2v = t2.y - t0.y;
+    float det = d1u * d2v - d1v * d2u;
+    if (!(std::abs(det) > 0)) return;  // degenerate uv mapping: no tangents, keep the normal
+    Vec3 dpdu = (dp1 * d2v - dp2 * d1v) / det, dpdv = (dp2 * d1u - dp1 * d2u) / det;
+    Vec2 g = sh.bump_tex->eval_grad(hit.uv);
+    const Vec3 n = hit.ns;
+    Vec3 du = dpdu + n * (sh.bump_scale * g.x - dot(n, dpdu));
+    Vec3 dv = dpdv + n * (sh.bump_scale * g.y - dot(n, dpdv));
+    Vec3 nb = cross(du, dv);
+    float len = length(nb);
+    if (!(len > 0) || !std::isfinite(len)) return;
+    nb = nb / len;
+    hit.ns = dot(nb, hit.ng) < 0 ? -nb : nb;
+}
+
 }  // namespace
+
+void attach_mask_filter(RTCGeometry g, const Shape& sh) {
+    rtcSetGeometryUserData(g, const_cast<Shape*>(&sh));
+    rtcSetGeometryIntersectFilterFunction(g, mask_filter);
+    rtcSetGeometryOccludedFilterFunction(g, mask_filter);
+}
 
 Scene::~Scene() {
     if (rtc_) rtcReleaseScene(rtc_);
@@ -128,6 +217,7 @@ bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
         hit.ng = ng;
         hit.planar = true;
         if (sh.uv_map != UvMap::None) hit.uv = triangle_uv(sh, i0, i1, i2, b0, b1, b2);
+        if (sh.bump_tex) apply_bump(sh, i0, i1, i2, hit);
     }
     return true;
 }

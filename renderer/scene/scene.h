@@ -41,6 +41,14 @@ struct Shape {
     std::vector<Vec3> face_normals;  // unit geometric normal per triangle (from the baked winding)
     SphereData sphere;      // world space (sphere); Embree keeps a pointer to it
     UvMap uv_map = UvMap::None;
+    // Mask (MaterialDesc::opacity): a hit survives with probability opacity (or the texture's
+    // value at its uv); Embree filter functions drop the others (scene.cpp). 1 and null: opaque.
+    float opacity = 1.f;
+    const BitmapTexture* opacity_tex = nullptr;
+    bool masked() const { return opacity < 1.f || opacity_tex != nullptr; }
+    // Bump map (MaterialDesc::bump_texture): Scene::intersect tilts the shading normal.
+    const BitmapTexture* bump_tex = nullptr;
+    float bump_scale = 1.f;
     Vec3 sphere_axes[3];    // sphere: unit world directions of its local x, y, z (for uv)
     double area = 0;                     // world-space surface area
     DiscreteDistribution tri_by_area;    // triangles, for uniform area sampling
@@ -53,6 +61,9 @@ struct SceneBounds {
     float radius() const { return 0.5f * length(hi - lo); }
     bool empty() const { return lo.x > hi.x; }
 };
+
+// Makes Embree skip the hits on a masked triangle shape that its opacity drops (scene.cpp).
+void attach_mask_filter(RTCGeometry g, const Shape& sh);
 
 class Scene {
 public:

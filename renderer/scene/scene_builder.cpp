@@ -59,16 +59,22 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
     std::unordered_map<std::string, uint32_t> material_index;
     std::map<std::pair<std::string, bool>, std::shared_ptr<const Image>> images;  // (file, raw)
     auto texture_for = [&](const BitmapDesc& bd) -> const BitmapTexture* {
-        auto& img = images[{bd.file, bd.raw}];
-        if (!img) {
-            poll();
-            img = load_image(gate, bd.file, bd.raw, fmt::format("{}: {}: ", where(bd.loc), bd.loc.key), bd.written);
-        }
         auto tex = std::make_unique<BitmapTexture>();
-        tex->image = img;
-        tex->filter = bd.filter;
-        tex->wrap = bd.wrap;
         tex->to_uv = bd.to_uv;
+        if (bd.checker) {  // procedural: no file
+            tex->checker = true;
+            tex->color0 = bd.color0;
+            tex->color1 = bd.color1;
+        } else {
+            auto& img = images[{bd.file, bd.raw}];
+            if (!img) {
+                poll();
+                img = load_image(gate, bd.file, bd.raw, fmt::format("{}: {}: ", where(bd.loc), bd.loc.key), bd.written);
+            }
+            tex->image = img;
+            tex->filter = bd.filter;
+            tex->wrap = bd.wrap;
+        }
         s->textures_.push_back(std::move(tex));
         return s->textures_.back().get();
     };
@@ -88,16 +94,45 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
                 p->diffuse_reflectance_tex = texture_for(*bd);
                 p->diffuse_reflectance = p->diffuse_reflectance_tex->mean();
             } else {
-                throw SceneError(fmt::format("{}: {}: only a diffuse or plastic reflectance can be a bitmap", where(bd->loc),
+                throw SceneError(fmt::format("{}: {}: only a diffuse or plastic reflectance can be a texture", where(bd->loc),
                                              bd->loc.key));
             }
+        }
+        if (const auto& bd = m->second.specular_texture) {
+            auto* c = std::get_if<ConductorBsdf>(&b);
+            if (!c)
+                throw SceneError(fmt::format("{}: {}: only a conductor's specular_reflectance can be a texture here",
+                                             where(bd->loc), bd->loc.key));
+            c->specular_reflectance_tex = texture_for(*bd);
+            c->specular_reflectance = c->specular_reflectance_tex->mean();
         }
         s->materials_.push_back(b);
         material_index.emplace(sd.material, idx);
         return idx;
     };
+    // Mask opacity and bump map per material (index as materials_), made once per material.
+    struct ShapeTextures {
+        float opacity = 1.f;
+        const BitmapTexture* opacity_tex = nullptr;
+        const BitmapTexture* bump_tex = nullptr;
+        float bump_scale = 1.f;
+    };
+    std::vector<ShapeTextures> shape_tex;
+    auto shape_textures_for = [&](uint32_t material, const std::string& name) {
+        if (shape_tex.size() <= material) {
+            const MaterialDesc& md = desc.materials.at(name);
+            shape_tex.resize(material + 1);
+            ShapeTextures& t = shape_tex[material];
+            t.opacity = md.opacity;
+            if (md.opacity_texture) t.opacity_tex = texture_for(*md.opacity_texture);
+            if (md.bump_texture) t.bump_tex = texture_for(*md.bump_texture);
+            t.bump_scale = md.bump_scale;
+        }
+        return shape_tex[material];
+    };
     auto textured = [&](uint32_t material) {
-        return bsdf_is_textured(s->materials_[material]);
+        const ShapeTextures& t = shape_tex[material];
+        return bsdf_is_textured(s->materials_[material]) || t.opacity < 1.f || t.opacity_tex || t.bump_tex;
     };
 
     s->shapes_.reserve(desc.shapes.size());
@@ -107,8 +142,18 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
         Shape sh;
         sh.name = fmt::format("shapes[{}]", i);
         sh.material = material_for(sd, i);
+        {
+            const ShapeTextures& t = shape_textures_for(sh.material, sd.material);
+            sh.opacity = t.opacity;
+            sh.opacity_tex = t.opacity_tex;
+            sh.bump_tex = t.bump_tex;
+            sh.bump_scale = t.bump_scale;
+        }
         sh.flip_normals = sd.flip_normals;
         if (sd.type == ShapeType::Sphere) {
+            if (sh.masked() || sh.bump_tex)
+                throw SceneError(fmt::format("{}: {}: a mask (opacity) or bump map on a sphere is not supported; use a mesh",
+                                             where(sd.loc), sh.name));
             sh.kind = ShapeKind::Sphere;
             // A sphere's to_world may translate and scale uniformly; anything else is rejected.
             Vec3d c = sd.to_world.point(sd.center);
@@ -140,6 +185,8 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
                 case ShapeType::Sphere: break;
             }
             if (sd.face_normals) sh.mesh.normals.clear();
+            if (sh.bump_tex && sd.type == ShapeType::Disk)
+                throw SceneError(fmt::format("{}: {}: a bump map on a disk is not supported; use a mesh", where(sd.loc), sh.name));
             if (textured(sh.material)) sh.uv_map = sd.type == ShapeType::Disk ? UvMap::Disk : UvMap::Vertex;
             else sh.mesh.uvs.clear();  // nothing looks them up
             auto tf = Transform::make(sd.to_world);
@@ -171,6 +218,10 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
             if (sh.mesh.triangle_count() == 0)
                 throw SceneError(fmt::format("{}: {}: the shape has no triangles", where(sd.loc), sh.name));
         }
+        if (sd.emitter && !is_black(sd.emitter->radiance) && sh.masked())
+            // Light sampling picks points by area, holes included: the emission would not match.
+            throw SceneError(fmt::format("{}: {}: a mask (opacity) on an emitting shape is not supported", where(sd.loc),
+                                         sh.name));
         if (sd.emitter && !is_black(sd.emitter->radiance)) {
             sh.light = int32_t(s->lights_.size());
             s->lights_.push_back(AreaLight{uint32_t(i), sd.emitter->radiance, sd.emitter->two_sided});
@@ -242,6 +293,7 @@ void Scene::add_embree_geometry(const std::function<bool()>& cancelled) {
         auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                    3 * sizeof(unsigned), sh.mesh.triangle_count()));
         std::copy(sh.mesh.indices.begin(), sh.mesh.indices.end(), idx);
+        if (sh.masked()) attach_mask_filter(g, sh);
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(rtc_, g, unsigned(i));
         rtcReleaseGeometry(g);

@@ -91,8 +91,10 @@ struct SensorDesc {
 
 // A `{type: bitmap, file: ...}` value: Mitsuba's bitmap texture. The file is checked through the
 // scene's FileGate at parse time and decoded when a shape's material needs it (Scene::build).
+// A texture: a bitmap file, or (checker) Mitsuba's procedural checkerboard, which uses only
+// to_uv, color0 and color1.
 struct BitmapDesc {
-    std::string file;  // absolute path
+    std::string file;  // absolute path (empty for a checkerboard)
     TexFilter filter = TexFilter::Bilinear;
     TexWrap wrap = TexWrap::Repeat;
     bool raw = false;  // false: 8/16-bit data is sRGB-decoded to linear
@@ -100,6 +102,8 @@ struct BitmapDesc {
     SourceLoc loc;     // of the bitmap mapping, for load errors
     std::string written;  // the file as the scene wrote it, for messages
     SourceLoc file_loc;   // of the file value itself (key "....file")
+    bool checker = false;
+    Rgb color0{0.4f, 0.4f, 0.4f}, color1{0.2f, 0.2f, 0.2f};  // Mitsuba's defaults
 };
 
 struct MaterialDesc {
@@ -109,6 +113,15 @@ struct MaterialDesc {
     // Diffuse and plastic: the (diffuse) reflectance is this bitmap (the bsdf's own value is then unused).
     // Last, so that {name, bsdf, loc} still initialises an untextured material.
     std::optional<BitmapDesc> reflectance_texture;
+    // Conductor: specular_reflectance is this texture.
+    std::optional<BitmapDesc> specular_texture;
+    // Mask (Mitsuba's `mask` wrapper, YAML `opacity`): the surface is there with probability
+    // opacity (1 = opaque), a constant or opacity_texture's first channel; see Scene::intersect.
+    float opacity = 1.f;
+    std::optional<BitmapDesc> opacity_texture;
+    // Bump map (Mitsuba's `bumpmap` wrapper): height = bump_scale x the texture's first channel.
+    std::optional<BitmapDesc> bump_texture;
+    float bump_scale = 1.f;
 };
 
 struct EmitterDesc {

@@ -10,7 +10,9 @@ void for_each_scene_file(const SceneDesc& desc, const std::function<void(const S
     for (const ShapeDesc& s : desc.shapes)
         if (s.type == ShapeType::Mesh && !s.file.empty()) fn({s.file, s.written, s.file_loc.file.empty() ? s.loc : s.file_loc, "mesh"});
     for (const auto& [name, m] : desc.materials)
-        if (const auto& t = m.reflectance_texture) fn({t->file, t->written, t->file_loc.file.empty() ? t->loc : t->file_loc, "texture"});
+        for (const auto* t : {&m.reflectance_texture, &m.specular_texture, &m.opacity_texture, &m.bump_texture})
+            if (*t && !(*t)->checker)  // a checkerboard reads no file
+                fn({(*t)->file, (*t)->written, (*t)->file_loc.file.empty() ? (*t)->loc : (*t)->file_loc, "texture"});
 }
 
 const FileGate& scene_gate(const SceneDesc& desc) { return desc.files ? *desc.files : *FileGate::unconfined(); }

@@ -145,7 +145,7 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Materials
 
-enum class MatType { Diffuse, Conductor, Dielectric, Plastic, RoughPlastic, Black };
+enum class MatType { Diffuse, Conductor, Dielectric, ThinDielectric, Plastic, RoughPlastic, Black };
 
 void parse_alpha(ParamBag& b, float& au, float& av) {
     bool iso = b.has("alpha"), aniso = b.has("alpha_u") || b.has("alpha_v");
@@ -274,11 +274,19 @@ UvTransform parse_to_uv(const ParamValue& v) {
     return t;
 }
 
+// A texture mapping: {type: bitmap, file, ...} or {type: checkerboard, color0, color1, to_uv}.
 BitmapDesc parse_bitmap(const ParamValue& v) {
     ParamBag b(v);
     BitmapDesc t;
     t.loc = v.loc();
-    ParamBag::enum_value<int>(b.require("type"), {{"bitmap", 0}});
+    if (ParamBag::enum_value<int>(b.require("type"), {{"bitmap", 0}, {"checkerboard", 1}}) == 1) {
+        t.checker = true;
+        t.color0 = rgb_in(b, "color0", t.color0, 0, 1);
+        t.color1 = rgb_in(b, "color1", t.color1, 0, 1);
+        if (auto u = b.get("to_uv")) t.to_uv = parse_to_uv(*u);
+        b.check_unused();
+        return t;
+    }
     NamedFile f = scene_file(b.require("file"));
     t.file = f.file;
     t.written = f.written;
@@ -301,6 +309,7 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
     MatType type = ParamBag::enum_value<MatType>(b.require("type"), {{"diffuse", MatType::Diffuse},
                                                                      {"conductor", MatType::Conductor},
                                                                      {"dielectric", MatType::Dielectric},
+                                                                     {"thindielectric", MatType::ThinDielectric},
                                                                      {"plastic", MatType::Plastic},
                                                                      {"roughplastic", MatType::RoughPlastic},
                                                                      {"black", MatType::Black}});
@@ -333,7 +342,10 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
                 c.k = rgb_in(b, "k", c.k, 0, kInf);
                 c.has_ior = true;
             }
-            c.specular_reflectance = rgb_in(b, "specular_reflectance", c.specular_reflectance, 0, 1);
+            if (b.has("specular_reflectance") && b.get("specular_reflectance")->is_map())
+                m.specular_texture = parse_bitmap(*b.get("specular_reflectance"));
+            else
+                c.specular_reflectance = rgb_in(b, "specular_reflectance", c.specular_reflectance, 0, 1);
             parse_alpha(b, c.alpha_u, c.alpha_v);
             c.distribution = parse_distribution(b);
             c.two_sided = b.get_bool("two_sided", true);
@@ -353,6 +365,17 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
             d.specular_transmittance = rgb_in(b, "specular_transmittance", d.specular_transmittance, 0, 1);
             parse_alpha(b, d.alpha_u, d.alpha_v);
             d.distribution = parse_distribution(b);
+            m.bsdf = d;
+            break;
+        }
+        case MatType::ThinDielectric: {
+            ThinDielectricBsdf d;
+            // Mitsuba's defaults: BK7 glass in air.
+            float int_ior = parse_ior(b, "int_ior", 1.5046f);
+            float ext_ior = parse_ior(b, "ext_ior", 1.000277f);
+            d.eta = int_ior / ext_ior;
+            d.specular_reflectance = rgb_in(b, "specular_reflectance", d.specular_reflectance, 0, 1);
+            d.specular_transmittance = rgb_in(b, "specular_transmittance", d.specular_transmittance, 0, 1);
             m.bsdf = d;
             break;
         }
@@ -380,6 +403,21 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
             break;
         }
         case MatType::Black: m.bsdf = BlackBsdf{}; break;
+    }
+    // Any material may be masked (Mitsuba's mask wrapper): a number in [0, 1] or a texture whose
+    // first channel is the opacity.
+    if (b.has("opacity") && b.get("opacity")->is_map())
+        m.opacity_texture = parse_bitmap(*b.get("opacity"));
+    else
+        m.opacity = float_in(b, "opacity", 1.f, 0, false, 1, false);
+    // Any material may be bump mapped (Mitsuba's bumpmap wrapper): height = bump_scale x the
+    // texture's first channel, in units of uv.
+    if (auto v = b.get("bump")) {
+        if (!v->is_map()) v->fail("expected a texture mapping ({type: bitmap, ...}), got " + v->describe());
+        m.bump_texture = parse_bitmap(*v);
+        m.bump_scale = float_in(b, "bump_scale", 1.f, -1e6, false, 1e6, false);
+    } else if (b.has("bump_scale")) {
+        b.get("bump_scale")->fail("bump_scale needs a bump texture");
     }
     b.check_unused();
     return m;

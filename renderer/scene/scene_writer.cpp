@@ -60,6 +60,15 @@ std::string rel_path(const std::string& file, const std::string& base_dir) {
 }
 
 std::string bitmap(const BitmapDesc& t, const std::string& base_dir) {
+    if (t.checker) {
+        std::string s = fmt::format("{{type: checkerboard, color0: {}, color1: {}", rgb(t.color0), rgb(t.color1));
+        if (!t.to_uv.is_identity()) {
+            s += ", to_uv: {matrix: [";
+            for (size_t i = 0; i < 6; ++i) s += (i ? ", " : "") + num(t.to_uv.m[i]);
+            s += "]}";
+        }
+        return s + "}";
+    }
     std::string s = fmt::format("{{type: bitmap, file: {}, filter: {}, wrap: {}, raw: {}", q(rel_path(t.file, base_dir)),
                                 t.filter == TexFilter::Nearest ? "nearest" : "bilinear",
                                 t.wrap == TexWrap::Clamp ? "clamp" : t.wrap == TexWrap::Mirror ? "mirror" : "repeat", t.raw);
@@ -71,7 +80,7 @@ std::string bitmap(const BitmapDesc& t, const std::string& base_dir) {
     return s + "}";
 }
 
-std::string material(const MaterialDesc& m, const std::string& base_dir) {
+std::string material_bsdf(const MaterialDesc& m, const std::string& base_dir) {
     const Bsdf& b = m.bsdf;
     if (auto* d = std::get_if<DiffuseBsdf>(&b))
         return fmt::format("{{type: diffuse, reflectance: {}, two_sided: {}}}",
@@ -80,7 +89,8 @@ std::string material(const MaterialDesc& m, const std::string& base_dir) {
     if (auto* c = std::get_if<ConductorBsdf>(&b)) {
         std::string s = "{type: conductor";
         if (c->has_ior) s += fmt::format(", eta: {}, k: {}", rgb(c->eta), rgb(c->k));
-        s += fmt::format(", specular_reflectance: {}", rgb(c->specular_reflectance));
+        s += fmt::format(", specular_reflectance: {}",
+                         m.specular_texture ? bitmap(*m.specular_texture, base_dir) : rgb(c->specular_reflectance));
         s += alpha(c->alpha_u, c->alpha_v);
         return s + fmt::format(", distribution: {}, two_sided: {}}}", dist(c->distribution), c->two_sided);
     }
@@ -92,6 +102,10 @@ std::string material(const MaterialDesc& m, const std::string& base_dir) {
             num(d->eta), rgb(d->specular_reflectance), rgb(d->specular_transmittance), alpha(d->alpha_u, d->alpha_v),
             dist(d->distribution));
     }
+    if (auto* d = std::get_if<ThinDielectricBsdf>(&b))
+        return fmt::format("{{type: thindielectric, int_ior: {}, ext_ior: 1, specular_reflectance: {}, "
+                           "specular_transmittance: {}}}",
+                           num(d->eta), rgb(d->specular_reflectance), rgb(d->specular_transmittance));
     if (auto* p = std::get_if<PlasticBsdf>(&b)) {
         // int_ior / ext_ior reproduces eta exactly with ext_ior 1 (and with it fdr_int).
         std::string s = fmt::format("{{type: {}, diffuse_reflectance: {}, specular_reflectance: {}, int_ior: {}, ext_ior: 1, "
@@ -103,6 +117,19 @@ std::string material(const MaterialDesc& m, const std::string& base_dir) {
         return s + fmt::format(", two_sided: {}}}", p->two_sided);
     }
     return "{type: black}";
+}
+
+std::string material(const MaterialDesc& m, const std::string& base_dir) {
+    std::string s = material_bsdf(m, base_dir);
+    if (m.opacity_texture || m.opacity != 1.f) {
+        s.pop_back();  // the closing brace
+        s += ", opacity: " + (m.opacity_texture ? bitmap(*m.opacity_texture, base_dir) : num(m.opacity)) + "}";
+    }
+    if (m.bump_texture) {
+        s.pop_back();
+        s += ", bump: " + bitmap(*m.bump_texture, base_dir) + ", bump_scale: " + num(m.bump_scale) + "}";
+    }
+    return s;
 }
 
 const char* shape_type(ShapeType t) {

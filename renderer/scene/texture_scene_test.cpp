@@ -67,8 +67,8 @@ TEST(TextureScene, ErrorsNameTheLineAndKey) {
     EXPECT_NE(e.find("scene.yaml:4: materials.m.reflectance.filtre: unknown key"), std::string::npos) << e;
     e = f.error("materials:\n  m: {type: diffuse, reflectance: {type: bitmap, file: textures/wood.png, wrap: tile}}\n");
     EXPECT_NE(e.find("materials.m.reflectance.wrap: expected one of repeat, mirror, clamp"), std::string::npos) << e;
-    e = f.error("materials:\n  m: {type: diffuse, reflectance: {type: checkerboard}}\n");
-    EXPECT_NE(e.find("materials.m.reflectance.type: expected one of bitmap"), std::string::npos) << e;
+    e = f.error("materials:\n  m: {type: diffuse, reflectance: {type: noise}}\n");
+    EXPECT_NE(e.find("materials.m.reflectance.type: expected one of bitmap, checkerboard"), std::string::npos) << e;
     e = f.error("materials:\n  m: {type: diffuse, reflectance: {type: bitmap}}\n");
     EXPECT_NE(e.find("materials.m.reflectance.file: missing key"), std::string::npos) << e;
     e = f.error("materials:\n  m: {type: diffuse, reflectance: {type: bitmap, file: textures/wood.png, to_uv: {scale: [1, 2, 3]}}}\n");
@@ -170,6 +170,134 @@ shapes:
         std::string again = write_scene_yaml(back, base);
         EXPECT_EQ(again.substr(again.find("omega: 1")), yaml.substr(yaml.find("omega: 1")));
     }
+}
+
+// Checkerboard on every textured parameter (diffuse, plastic, conductor specular_reflectance);
+// the conductor's is new with it. No file is read for a checkerboard.
+TEST(TextureScene, CheckerboardOnDiffusePlasticAndConductor) {
+    Fixture f;
+    SceneDesc d = f.parse(R"(materials:
+  wall: {type: diffuse, reflectance: {type: checkerboard, color0: 0.8, color1: [0.1, 0.1, 0.15], to_uv: {scale: 4}}}
+  p: {type: plastic, diffuse_reflectance: {type: checkerboard}}
+  metal: {type: conductor, alpha: 0.1, specular_reflectance: {type: checkerboard, color0: 1, color1: 0.25,
+          to_uv: {scale: [8, 4]}}}
+  pane: {type: thindielectric, int_ior: 1.5, ext_ior: 1, specular_transmittance: [0.9, 0.9, 0.8]}
+shapes:
+  - {type: rectangle, material: wall}
+  - {type: rectangle, material: p}
+  - {type: sphere, material: metal}
+  - {type: rectangle, material: pane}
+)");
+    const auto& t = *d.materials.at("wall").reflectance_texture;
+    EXPECT_TRUE(t.checker);
+    EXPECT_EQ(t.color0, Rgb(0.8f));
+    EXPECT_EQ(t.to_uv.m, (std::array<float, 6>{4, 0, 0, 0, 4, 0}));
+    ASSERT_TRUE(d.materials.at("metal").specular_texture);
+    auto scene = Scene::build(d);
+    Bsdf tmp;
+    const Bsdf& wall = scene->materials()[scene->shapes()[0].material];
+    EXPECT_EQ(std::get<DiffuseBsdf>(resolve_bsdf(wall, {0.01f, 0.01f}, tmp)).reflectance, Rgb(0.8f));
+    EXPECT_EQ(std::get<DiffuseBsdf>(resolve_bsdf(wall, {0.2f, 0.01f}, tmp)).reflectance, (Rgb{0.1f, 0.1f, 0.15f}));
+    const Bsdf& p = scene->materials()[scene->shapes()[1].material];
+    EXPECT_EQ(std::get<PlasticBsdf>(resolve_bsdf(p, {0.1f, 0.1f}, tmp)).diffuse_reflectance, Rgb(0.4f));
+    const Bsdf& metal = scene->materials()[scene->shapes()[2].material];
+    EXPECT_TRUE(bsdf_is_textured(metal));
+    EXPECT_EQ(std::get<ConductorBsdf>(metal).specular_reflectance, Rgb(0.625f));  // the mean
+    EXPECT_EQ(scene->shapes()[2].uv_map, UvMap::Sphere);
+    const auto& c = std::get<ConductorBsdf>(resolve_bsdf(metal, {0.01f, 0.01f}, tmp));
+    EXPECT_EQ(c.specular_reflectance, Rgb(1.f));
+    EXPECT_EQ(c.alpha_u, 0.1f);
+    EXPECT_EQ(std::get<ConductorBsdf>(resolve_bsdf(metal, {0.1f, 0.01f}, tmp)).specular_reflectance, Rgb(0.25f));
+    EXPECT_EQ(std::get<ThinDielectricBsdf>(scene->materials()[scene->shapes()[3].material]).specular_transmittance,
+              (Rgb{0.9f, 0.9f, 0.8f}));
+    // The writer keeps every texture and the sheet.
+    std::string yaml = write_scene_yaml(d, "");
+    SceneDesc back = parse_scene_string(yaml, (f.dir.path / "back.yaml").string());
+    EXPECT_EQ(back.materials.at("wall").reflectance_texture->to_uv.m, t.to_uv.m) << yaml;
+    EXPECT_EQ(back.materials.at("metal").specular_texture->color1, Rgb(0.25f)) << yaml;
+    EXPECT_TRUE(std::holds_alternative<ThinDielectricBsdf>(back.materials.at("pane").bsdf)) << yaml;
+    std::string again = write_scene_yaml(back, "");
+    EXPECT_EQ(again.substr(again.find("omega: 1")), yaml.substr(yaml.find("omega: 1")));
+    EXPECT_NE(f.error("materials: {m: {type: diffuse, reflectance: {type: checkerboard, file: x.png}}}\nshapes: []\n")
+                  .find("file"),
+              std::string::npos);
+}
+
+// A masked quad in front of a floor: opacity 0 is not there for any query, opacity 1 is opaque,
+// a bitmap's first channel decides per uv, and a fractional opacity lets through the fraction
+// 1 - opacity of the rays (a hash coin, the same for the same ray).
+TEST(TextureScene, MaskOpacityDropsHitsForEveryQuery) {
+    Fixture f;
+    auto scene_with = [&](const std::string& opacity) {
+        SceneDesc d = f.parse("materials:\n  m: {type: diffuse, opacity: " + opacity + R"(}
+shapes:
+  - {type: rectangle, material: m, to_world: [{translate: [0, 0, 1]}]}
+  - {type: rectangle, material: {type: diffuse}, to_world: [{scale: 4}]}
+)");
+        return Scene::build(d);
+    };
+    auto hits_mask = [](const Scene& s, Vec3 o) {
+        SurfaceHit h;
+        Ray r{o, Vec3(0, 0, -1)};
+        bool hit = s.intersect(r, h);
+        EXPECT_TRUE(hit);
+        Ray shadow{o, Vec3(0, 0, -1), o.z - 0.5f};  // ends before the floor (z = 0), beyond the mask (z = 1)
+        EXPECT_EQ(s.occluded(shadow), h.shape == 0);  // any-hit agrees with closest-hit
+        return h.shape == 0;
+    };
+    auto none = scene_with("0");
+    auto full = scene_with("1");
+    EXPECT_FALSE(hits_mask(*none, {0.2f, 0.3f, 3}));
+    EXPECT_TRUE(hits_mask(*full, {0.2f, 0.3f, 3}));
+    EXPECT_FALSE(full->shapes()[0].masked());
+    // wood.png: texel 0 (u < 1/2) red (first channel 1: opaque), texel 1 blue (0: a hole).
+    auto bitmap = scene_with("{type: bitmap, file: textures/wood.png, filter: nearest, raw: true}");
+    EXPECT_TRUE(hits_mask(*bitmap, {-0.5f, 0.f, 3}));  // rectangle uv u = (x + 1) / 2
+    EXPECT_FALSE(hits_mask(*bitmap, {0.5f, 0.f, 3}));
+    auto third = scene_with("0.3");
+    int hit = 0;
+    const int n = 20000;
+    for (int i = 0; i < n; ++i) hit += hits_mask(*third, {-0.9f + 1.8f * float(i % 200) / 200.f, -0.9f + 1.8f * float(i / 200) / 100.f, 3});
+    EXPECT_NEAR(hit, 0.3 * n, 5 * std::sqrt(n * 0.3 * 0.7));
+    EXPECT_EQ(hits_mask(*third, {0.1f, 0.1f, 3}), hits_mask(*third, {0.1f, 0.1f, 3}));  // deterministic
+    EXPECT_NE(f.error("materials: {m: {type: diffuse, opacity: 1.5}}\nshapes: []\n"), "");
+    EXPECT_NE(scene_error_of([&] {
+                  Scene::build(f.parse("materials: {m: {type: diffuse, opacity: 0.5}}\nshapes: [{type: sphere, material: m}]\n"));
+              }).find("sphere"),
+              std::string::npos);
+    EXPECT_NE(scene_error_of([&] {
+                  Scene::build(f.parse("materials: {m: {type: diffuse, opacity: 0.5}}\nshapes: [{type: rectangle, material: m, "
+                                       "emitter: {type: area, radiance: 1}}]\n"));
+              }).find("emitting shape"),
+              std::string::npos);
+}
+
+// Mitsuba's bumpmap on a rectangle: a height ramp in u tilts the shading normal by the analytic
+// amount, dp/du' = dp/du + n g_u with dp/du = (2, 0, 0) for the unit rectangle.
+TEST(TextureScene, BumpMapTiltsTheShadingNormal) {
+    Fixture f;
+    test::write_image_u8((f.dir.path / "ramp.png").string(), 4, 1, 1, {0, 64, 128, 192});
+    SceneDesc d = f.parse(R"(materials:
+  m: {type: diffuse, bump: {type: bitmap, file: ramp.png, raw: true}, bump_scale: 0.5}
+shapes:
+  - {type: rectangle, material: m}
+)");
+    ASSERT_TRUE(d.materials.at("m").bump_texture);
+    auto scene = Scene::build(d);
+    SurfaceHit h;
+    ASSERT_TRUE(scene->intersect(Ray{{0.01f, 0.2f, 2.f}, {0, 0, -1}}, h));  // u = 0.505: between texels 1 and 2
+    const float g = 0.5f * (64.f / 255.f) * 4.f;
+    Vec3 expect = normalize(Vec3(-2.f * g, 0.f, 4.f));  // cross((2, 0, g), (0, 2, 0))
+    EXPECT_NEAR(h.ns.x, expect.x, 1e-5f);
+    EXPECT_NEAR(h.ns.y, expect.y, 1e-5f);
+    EXPECT_NEAR(h.ns.z, expect.z, 1e-5f);
+    EXPECT_EQ(h.ng, Vec3(0, 0, 1));  // the geometry is untouched
+    // The writer keeps it.
+    std::string yaml = write_scene_yaml(d, "");
+    SceneDesc back = parse_scene_string(yaml, (f.dir.path / "back.yaml").string());
+    ASSERT_TRUE(back.materials.at("m").bump_texture) << yaml;
+    EXPECT_EQ(back.materials.at("m").bump_scale, 0.5f);
+    EXPECT_NE(f.error("materials: {m: {type: diffuse, bump_scale: 2}}\nshapes: []\n").find("bump"), std::string::npos);
 }
 
 }  // namespace

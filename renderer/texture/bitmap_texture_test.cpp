@@ -86,6 +86,54 @@ TEST(BitmapTexture, ToUvAppliesBeforeTheLookup) {
     EXPECT_FLOAT_EQ(p.y, 2.25f);
 }
 
+// Mitsuba 3's checkerboard: color0 where frac(u') > 1/2 equals frac(v') > 1/2, u' = to_uv(uv).
+// With to_uv scale 4 (the thin-glass scene): 8 x 8 checks on [0, 1]^2, color0 at the corner.
+TEST(BitmapTexture, CheckerboardAsMitsuba) {
+    BitmapTexture t;
+    t.checker = true;
+    t.color0 = Rgb(0.8f);
+    t.color1 = Rgb(0.1f, 0.1f, 0.15f);
+    t.to_uv.m = {4, 0, 0, 0, 4, 0};
+    EXPECT_EQ(t.eval({0.01f, 0.01f}), t.color0);  // frac 0.04, 0.04: both <= 1/2
+    EXPECT_EQ(t.eval({0.2f, 0.01f}), t.color1);   // frac(0.8) > 1/2, frac(0.04) not
+    EXPECT_EQ(t.eval({0.2f, 0.2f}), t.color0);
+    EXPECT_EQ(t.eval({0.01f, 0.2f}), t.color1);
+    EXPECT_EQ(t.eval({0.26f, 0.01f}), t.color0);  // the next check along u: 8 per unit
+    EXPECT_EQ(t.eval({-0.01f, 0.01f}), t.color1); // repeats below 0 (frac of -0.04 is 0.96)
+    EXPECT_EQ(t.eval({std::nanf(""), 0.01f}), t.color0);
+    EXPECT_EQ(t.mean(), (t.color0 + t.color1) * 0.5f);
+    // Default colours: Mitsuba's 0.4 / 0.2.
+    BitmapTexture d;
+    d.checker = true;
+    EXPECT_EQ(d.eval({0.1f, 0.1f}), Rgb(0.4f));
+    EXPECT_EQ(d.eval({0.6f, 0.1f}), Rgb(0.2f));
+}
+
+// The bump map's gradient: of the bilinear interpolant, in units of uv, through to_uv.
+TEST(BitmapTexture, GradientOfTheBilinearInterpolant) {
+    auto img = std::make_shared<Image>();
+    img->width = 4;
+    img->height = 2;
+    // h = 0.25 i + 0.5 j at texel (i, j): slopes 0.25 x 4 = 1 per unit u, 0.5 x 2 = 1 per unit v.
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 4; ++i) img->texels.push_back(Rgb(0.25f * float(i) + 0.5f * float(j), 9.f, 9.f));
+    BitmapTexture t;
+    t.image = img;
+    Vec2 g = t.eval_grad({0.5f, 0.5f});
+    EXPECT_NEAR(g.x, 1.f, 1e-5f);
+    EXPECT_NEAR(g.y, 1.f, 1e-5f);
+    t.filter = TexFilter::Nearest;  // still the interpolant's gradient (see eval_grad)
+    EXPECT_NEAR(t.eval_grad({0.5f, 0.5f}).x, 1.f, 1e-5f);
+    t.to_uv.m = {2, 0, 0, 0, 3, 0};  // h(2u, 3v): the chain rule scales the slopes
+    g = t.eval_grad({0.25f, 1.f / 6.f});
+    EXPECT_NEAR(g.x, 2.f, 1e-5f);
+    EXPECT_NEAR(g.y, 3.f, 1e-5f);
+    BitmapTexture c;
+    c.checker = true;
+    EXPECT_EQ(c.eval_grad({0.3f, 0.3f}).x, 0.f);
+    EXPECT_EQ(c.eval_grad({0.3f, 0.3f}).y, 0.f);
+}
+
 TEST(BitmapTexture, NonFiniteUvDoesNotReadOutOfRange) {
     auto t = grid2(TexFilter::Bilinear, TexWrap::Repeat);
     Rgb c = t.eval({std::nanf(""), INFINITY});
