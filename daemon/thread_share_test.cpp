@@ -54,16 +54,23 @@ TEST(ThreadShare, WeightsFromPriority) {
   EXPECT_GT(share_weight(-1'000'000), 0.0);
 }
 
+// Thread time that job a gets over job b's while both contend for `how_long`, from now on.
+double contended_ratio(ThreadShare& share, std::uint64_t a, std::uint64_t b, std::chrono::milliseconds how_long,
+                       Probe& probe) {
+  const double a0 = share.used_s(a), b0 = share.used_s(b);
+  contend(share, {a, b}, 4, how_long, probe);
+  return (share.used_s(a) - a0) / (share.used_s(b) - b0);
+}
+
 TEST(ThreadShare, SharesFollowTheWeights) {
   ThreadShare share(2);
   share.add(1, share_weight(10));
   share.add(2, share_weight(0));
   Probe probe;
-  contend(share, {1, 2}, 4, 900ms, probe);
+  const double ratio = contended_ratio(share, 1, 2, 900ms, probe);
   EXPECT_LE(probe.most.load(), 2);
-  const double ratio = share.used_s(1) / share.used_s(2);
-  EXPECT_GT(ratio, 1.6) << share.used_s(1) << " s against " << share.used_s(2) << " s";
-  EXPECT_LT(ratio, 2.5) << share.used_s(1) << " s against " << share.used_s(2) << " s";
+  EXPECT_GT(ratio, 1.6);
+  EXPECT_LT(ratio, 2.5);
 }
 
 TEST(ThreadShare, EqualWeightsShareEvenly) {
@@ -71,8 +78,7 @@ TEST(ThreadShare, EqualWeightsShareEvenly) {
   share.add(1, 1.0);
   share.add(2, 1.0);
   Probe probe;
-  contend(share, {1, 2}, 4, 600ms, probe);
-  const double ratio = share.used_s(1) / share.used_s(2);
+  const double ratio = contended_ratio(share, 1, 2, 600ms, probe);
   EXPECT_GT(ratio, 0.8);
   EXPECT_LT(ratio, 1.25);
 }
@@ -90,10 +96,8 @@ TEST(ThreadShare, ANewcomerDoesNotMakeUpForTimeBeforeItRan) {
   share.add(1, 1.0);
   Probe probe;
   contend(share, {1}, 4, 300ms, probe);
-  const double before = share.used_s(1);
   share.add(2, 1.0);
-  contend(share, {1, 2}, 4, 600ms, probe);
-  const double ratio = (share.used_s(1) - before) / share.used_s(2);
+  const double ratio = contended_ratio(share, 1, 2, 600ms, probe);
   EXPECT_GT(ratio, 0.8);  // without the clock start, job 1 would get nothing for 300 ms
   EXPECT_LT(ratio, 1.25);
 }
@@ -104,10 +108,8 @@ TEST(ThreadShare, AWeightChangeTakesEffect) {
   share.add(2, 1.0);
   Probe probe;
   contend(share, {1, 2}, 4, 300ms, probe);
-  const double a = share.used_s(1), b = share.used_s(2);
   share.set_weight(2, share_weight(20));
-  contend(share, {1, 2}, 4, 900ms, probe);
-  const double ratio = (share.used_s(2) - b) / (share.used_s(1) - a);
+  const double ratio = contended_ratio(share, 2, 1, 900ms, probe);
   EXPECT_GT(ratio, 3.0);
   EXPECT_LT(ratio, 5.5);
 }
