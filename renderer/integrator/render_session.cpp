@@ -33,10 +33,14 @@ int resolve_threads(int threads) {
     return std::max(1, int(std::thread::hardware_concurrency()));
 }
 
-RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
-    : scene_(scene), settings_(settings), tracer_(scene, tracer_settings(settings.integrator)), film_(scene.desc().sensor.film) {
+void RenderSession::check_settings(const RenderSettings& settings) {
     if (!settings.integrator.light_sampling && settings.integrator.type != IntegratorType::Path)
         throw std::invalid_argument("light_sampling = false is only available with the path integrator");
+}
+
+RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
+    : scene_(scene), settings_(settings), tracer_(scene, tracer_settings(settings.integrator)), film_(scene.desc().sensor.film) {
+    check_settings(settings);
     if (settings.integrator.type != IntegratorType::Path) {
         bdpt_ = std::make_unique<BdptTracer>(scene, settings.integrator);
         if (settings.strategy_images_max_k > 0)

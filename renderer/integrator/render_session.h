@@ -56,6 +56,8 @@ class RenderSession {
 public:
     // Throws std::invalid_argument when the integrator is not available.
     RenderSession(const Scene& scene, const RenderSettings& settings);
+    // What the constructor refuses, without allocating a film (the daemon checks every submit).
+    static void check_settings(const RenderSettings& settings);
 
     // Renders until the halt condition or abort(). Calls on_pass after each pass, on the calling
     // thread, while no worker touches the film. Returns the last report.
