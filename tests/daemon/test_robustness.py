@@ -24,11 +24,20 @@ def raw(d, data, expect_reply=True, close_after=False):
     s.settimeout(10)
     s.connect(d.sock)
     s.sendall(op.hello(1, "raw"))
-    s.sendall(data)
+    dec, frames = op.Decoder(), []
     if close_after:
+        # Read the welcome first: a client that leaves before it is written makes the daemon's
+        # write fail (peer gone), and it closes without reading what followed (TSan showed it).
+        while not frames:
+            chunk = s.recv(65536)
+            if not chunk:
+                break
+            dec.feed(chunk)
+            frames.extend(dec.frames())
+        s.sendall(data)
         s.close()
         return []
-    dec, frames = op.Decoder(), []
+    s.sendall(data)
     while True:
         try:
             chunk = s.recv(65536)
