@@ -27,7 +27,7 @@ Rgb Importer::texture_average(pugi::xml_node tex, const std::string& key) {
         if (auto c = find_param(e, ignored)) (void)c;  // sampling details of a texture Omega averages
     warn_unused(e);
 
-    ImagePixels img = decode_image(gate(), p.string(), file, fmt::format("{}:{}: {}.filename: ", file_, line_of(fn), key));
+    ImagePixels img = decode_image(gate(), p.string(), file, fmt::format("{}:{}: {}.filename: ", file_of(fn), line_of(fn), key));
     bool srgb = !raw && !img.is_float;
     const size_t nc = size_t(img.channels);
     double sum[3] = {0, 0, 0};
@@ -332,9 +332,9 @@ std::string Importer::material_for(pugi::xml_node bsdf, const std::string& fallb
     std::map<std::string, int> lines;
     YAML::Node y = read_bsdf(bsdf, key, false, lines);
     MaterialDesc m = checked(key, bsdf, lines, [&](ParamValue v) {
-        return parse_material_value(ParamValue(y, v.path(), fname_, v.line()), name, desc_.warnings);
+        return parse_material_value(ParamValue(y, v.path(), fname_of(bsdf), v.line()), name, desc_.warnings);
     });
-    m.loc = {file_, line_of(bsdf), key};
+    m.loc = {file_of(bsdf), line_of(bsdf), key};
     desc_.materials[name] = m;
     if (!id.empty()) material_of_id_[id] = name;
     return name;

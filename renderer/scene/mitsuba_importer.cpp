@@ -129,10 +129,14 @@ void Importer::read_defaults(pugi::xml_node scene) {
         if (!d.attribute("value")) fail(d, "default", "<default> needs a 'value' attribute");
         if (!vars_.count(name)) vars_[name] = d.attribute("value").as_string();
     }
+}
+
+void Importer::warn_unused_defines(pugi::xml_node scene) {
     for (const auto& [name, value] : opt_.defines) {
         bool declared = false;
         for (pugi::xml_node d : scene.children("default")) declared |= name == d.attribute("name").as_string();
-        bool used = text_.find("$" + name) != std::string::npos;
+        bool used = false;
+        for (const auto& src : sources_) used |= src->text.find("$" + name) != std::string::npos;
         if (!declared && !used)
             desc_.warnings.push_back(fmt::format("{}:1: define {}={} is not used by the scene", file_, name, value));
     }
@@ -165,7 +169,7 @@ void Importer::read_integrator(pugi::xml_node n) {
                          "geometric normals disagree about the side");
     warn_unused(e);
     desc_.integrator = checked(key, n, lines, [&](ParamValue v) {
-        return parse_integrator_value(ParamValue(y, v.path(), fname_, v.line()));
+        return parse_integrator_value(ParamValue(y, v.path(), fname_of(n), v.line()));
     });
 }
 
@@ -309,9 +313,9 @@ void Importer::read_sensor(pugi::xml_node n) {
     }
     warn_unused(e);
     desc_.sensor = checked(key, n, lines, [&](ParamValue v) {
-        return parse_sensor_value(ParamValue(y, v.path(), fname_, v.line()));
+        return parse_sensor_value(ParamValue(y, v.path(), fname_of(n), v.line()));
     });
-    desc_.sensor.loc = {file_, line_of(n), key};
+    desc_.sensor.loc = {file_of(n), line_of(n), key};
 }
 
 void Importer::read_shape(pugi::xml_node n, size_t index) {
@@ -319,7 +323,7 @@ void Importer::read_shape(pugi::xml_node n, size_t index) {
     Elem e{n, key, {}};
     std::string type = attr(n, "type", key);
     ShapeDesc s;
-    s.loc = {file_, line_of(n), key};
+    s.loc = {file_of(n), line_of(n), key};
     s.name = n.attribute("id") ? attr(n, "id", key) : "";
     if (type == "rectangle") s.type = ShapeType::Rectangle;
     else if (type == "cube") s.type = ShapeType::Cube;
@@ -348,7 +352,7 @@ void Importer::read_shape(pugi::xml_node n, size_t index) {
         fs::path abs = fs::absolute(p, ec);
         s.file = (ec ? p : abs).lexically_normal().string();
         s.written = file;
-        s.file_loc = {file_, line_of(fnode), key + ".filename"};  // checked through the gate in run()
+        s.file_loc = {file_of(fnode), line_of(fnode), key + ".filename"};  // checked through the gate in run()
         if (auto c = find_param(e, "face_normals")) s.face_normals = attr(c, "value", key) == "true";
         if (auto c = find_param(e, "flip_tex_coords")) s.flip_tex_coords = attr(c, "value", key) != "false";
     }
@@ -386,7 +390,7 @@ void Importer::read_shape(pugi::xml_node n, size_t index) {
             if (auto r = find_param(ee, "sampling_weight")) warn(r, ekey, "sampling_weight is ignored (lights are chosen by power)");
             warn_unused(ee);
             s.emitter = checked(ekey, target, lines, [&](ParamValue v) {
-                return parse_emitter_value(ParamValue(y, v.path(), fname_, v.line()));
+                return parse_emitter_value(ParamValue(y, v.path(), fname_of(target), v.line()));
             });
         }
     }
@@ -444,7 +448,7 @@ void Importer::read_emitter(pugi::xml_node n, size_t index) {
         std::string file = attr(fn, "value", key);
         fs::path p(file);
         if (p.is_relative()) p = dir_ / p;
-        ImagePixels img = decode_image(gate(), p.string(), file, fmt::format("{}:{}: {}.filename: ", file_, line_of(fn), key), "envmap");
+        ImagePixels img = decode_image(gate(), p.string(), file, fmt::format("{}:{}: {}.filename: ", file_of(fn), line_of(fn), key), "envmap");
         const size_t nc = size_t(img.channels);
         // Latitude-longitude map: weight each row by sin(theta), its share of the sphere.
         double sum[3] = {0, 0, 0}, wsum = 0;
@@ -471,53 +475,87 @@ void Importer::read_emitter(pugi::xml_node n, size_t index) {
     if (auto c = find_param(e, "sampling_weight")) warn(c, key, "sampling_weight is ignored (lights are chosen by power)");
     warn_unused(e);
     LightDesc l = checked(key, n, lines, [&](ParamValue v) {
-        return parse_light_value(ParamValue(y, v.path(), fname_, v.line()));
+        return parse_light_value(ParamValue(y, v.path(), fname_of(n), v.line()));
     });
-    l.loc = {file_, line_of(n), key};
+    l.loc = {file_of(n), line_of(n), key};
     desc_.lights.push_back(l);
 }
 
-SceneDesc Importer::run() {
-    pugi::xml_document doc;
-    pugi::xml_parse_result res = doc.load_buffer(text_.data(), text_.size(), pugi::parse_default, pugi::encoding_utf8);
+namespace {
+// Parses one file's text into its document, or names the file and line of the XML error.
+void parse_source(Source& src) {
+    pugi::xml_parse_result res =
+        src.doc->load_buffer(src.text.data(), src.text.size(), pugi::parse_default, pugi::encoding_utf8);
     if (!res)
-        throw SceneError(fmt::format("{}:{}: invalid XML: {}", file_, line_at(size_t(std::max<ptrdiff_t>(0, res.offset))),
-                                     res.description()));
-    pugi::xml_node scene = doc.child("scene");
-    if (!scene) throw SceneError(fmt::format("{}:1: scene: the root element must be <scene>", file_));
-    desc_.path = file_;
-    std::string version = scene.attribute("version").as_string();
-    if (version.empty()) warn(scene, "scene", "no version attribute; reading it as Mitsuba 3");
-    else if (version[0] == '0' || version[0] == '1') {
-        legacy_ = true;  // camelCase names are read as Mitsuba 3's snake_case: nothing to warn about
-    }
-    read_defaults(scene);
-    // Ids anywhere in the file (Mitsuba allows references to any named object).
-    for (pugi::xpath_node xn : doc.select_nodes("//*[@id and name() != 'ref']")) {
-        pugi::xml_node el = xn.node();
-        std::string id = attr(el, "id", el.name());
-        if (ids_.count(id)) fail(el, el.name(), "duplicate id '" + id + "'");
-        ids_[id] = el;
-    }
+        throw SceneError(fmt::format("{}:{}: invalid XML: {}", src.file,
+                                     src.line_at(size_t(std::max<ptrdiff_t>(0, res.offset))), res.description()));
+    if (!src.doc->child("scene"))
+        throw SceneError(fmt::format("{}:1: scene: the root element must be <scene>", src.file));
+}
+// Includes nest at most this deep: deeper is a cycle the path check missed, or abuse.
+constexpr size_t kMaxIncludeDepth = 16;
+// An included file is read whole; a scene description this big is not a scene.
+constexpr std::uint64_t kMaxIncludeBytes = std::uint64_t(64) << 20;
+}  // namespace
 
-    size_t shape_index = 0, emitter_index = 0;
-    bool have_integrator = false;
+void Importer::load_includes(pugi::xml_node scene, std::vector<std::string>& chain) {
+    for (pugi::xml_node inc : scene.children("include")) {
+        const std::string key = "include";
+        std::string written = required_attr(inc, "filename", key);
+        // Relative to the main scene's folder, as Mitsuba's file resolver finds it (also for
+        // files that an included file names).
+        fs::path p(written);
+        if (p.is_relative()) p = dir_ / p;
+        std::string id = p.lexically_normal().string();
+        if (std::find(chain.begin(), chain.end(), id) != chain.end())
+            fail(inc, key, "'" + written + "' includes itself (through " + std::to_string(chain.size()) + " file(s))");
+        if (chain.size() >= kMaxIncludeDepth)
+            fail(inc, key, fmt::format("includes nest deeper than {} files", kMaxIncludeDepth));
+        std::string text;
+        try {
+            text = gate().read(p.string(), kMaxIncludeBytes, written);
+        } catch (const FileRefused& e) {
+            fail(inc, key + ".filename", e.what());
+        }
+        std::string shown = fs::path(written).is_absolute() ? gate().shown(p.string()) : written;
+        sources_.push_back(std::make_unique<Source>(std::move(text), shown));
+        Source& src = *sources_.back();
+        parse_source(src);
+        pugi::xml_node inner = src.doc->child("scene");
+        for (pugi::xml_node d : inner.children("default"))
+            warn(d, "default", "a <default> in an included file is ignored (only the scene file's count)");
+        included_[inc] = inner;
+        chain.push_back(id);
+        load_includes(inner, chain);
+        chain.pop_back();
+    }
+}
+
+std::vector<pugi::xml_node> Importer::scenes() const {
+    std::vector<pugi::xml_node> out;
+    for (const auto& s : sources_) out.push_back(s->doc->child("scene"));
+    return out;
+}
+
+void Importer::read_scene_children(pugi::xml_node scene) {
     for (pugi::xml_node c : scene.children()) {
         if (c.type() != pugi::node_element) continue;
         std::string tag = c.name();
         if (tag == "default") continue;
-        if (tag == "integrator") {
-            if (have_integrator) warn(c, "integrator", "a second integrator was ignored");
+        if (tag == "include") {
+            read_scene_children(included_.at(c));
+        } else if (tag == "integrator") {
+            if (have_integrator_) warn(c, "integrator", "a second integrator was ignored");
             else read_integrator(c);
-            have_integrator = true;
+            have_integrator_ = true;
         } else if (tag == "sensor") {
             if (have_sensor_) warn(c, "sensor", "a second sensor was ignored (Omega renders one camera)");
             else read_sensor(c);
             have_sensor_ = true;
         } else if (tag == "shape") {
-            read_shape(c, shape_index++);
+            read_shape(c, shape_index_++);
         } else if (tag == "emitter") {
-            read_emitter(c, emitter_index++);
+            read_emitter(c, emitter_index_++);
         } else if (tag == "bsdf" || tag == "texture") {
             // Built when a shape refers to them.
         } else {
@@ -525,14 +563,42 @@ SceneDesc Importer::run() {
             warn(c, tag, "<" + tag + type + "> is not supported and was ignored");
         }
     }
+}
+
+SceneDesc Importer::run() {
+    Source& main = *sources_.front();
+    parse_source(main);
+    pugi::xml_node scene = main.doc->child("scene");
+    desc_.path = file_;
+    std::string version = scene.attribute("version").as_string();
+    if (version.empty()) warn(scene, "scene", "no version attribute; reading it as Mitsuba 3");
+    else if (version[0] == '0' || version[0] == '1') {
+        legacy_ = true;  // camelCase names are read as Mitsuba 3's snake_case: nothing to warn about
+    }
+    read_defaults(scene);
+    std::vector<std::string> chain{fs::path(file_).lexically_normal().string()};
+    load_includes(scene, chain);
+    warn_unused_defines(scene);
+    // Ids anywhere in any of the files (Mitsuba allows references to any named object).
+    for (pugi::xml_node sc : scenes()) {
+        for (pugi::xpath_node xn : sc.select_nodes("//*[@id and name() != 'ref']")) {
+            pugi::xml_node el = xn.node();
+            std::string id = attr(el, "id", el.name());
+            if (ids_.count(id)) fail(el, el.name(), "duplicate id '" + id + "'");
+            ids_[id] = el;
+        }
+    }
+
+    read_scene_children(scene);
     if (!have_sensor_) {
         desc_.sensor.film.crop = {0, 0, desc_.sensor.film.width, desc_.sensor.film.height};
         warn(scene, "scene", "no <sensor>: using Omega's default camera");
     }
-    for (pugi::xml_node b : scene.children("bsdf")) {
-        std::string id = b.attribute("id") ? attr(b, "id", "bsdf") : "";
-        if (!referenced_ids_.count(id)) warn(b, id.empty() ? "bsdf" : "bsdf(" + id + ")", "never used by any shape");
-    }
+    for (pugi::xml_node sc : scenes())
+        for (pugi::xml_node b : sc.children("bsdf")) {
+            std::string id = b.attribute("id") ? attr(b, "id", "bsdf") : "";
+            if (!referenced_ids_.count(id)) warn(b, id.empty() ? "bsdf" : "bsdf(" + id + ")", "never used by any shape");
+        }
     bool any_light = !desc_.lights.empty();
     for (const ShapeDesc& s : desc_.shapes) any_light |= s.emitter.has_value() && !is_black(s.emitter->radiance);
     if (!any_light) desc_.warnings.push_back(fmt::format("{}:1: the scene has no light source; the image will be black", file_));

@@ -43,12 +43,29 @@ struct Elem {
     void use(pugi::xml_node c) { used.insert(size_t(c.offset_debug())); }
 };
 
+// One XML file of the scene: the scene file itself, or one that an <include> brought in.
+struct Source {
+    std::string text;
+    std::string file;  // as messages name it
+    std::shared_ptr<const std::string> fname;
+    std::vector<size_t> newlines;
+    std::unique_ptr<pugi::xml_document> doc;
+    Source(std::string t, std::string f)
+        : text(std::move(t)), file(std::move(f)), fname(std::make_shared<const std::string>(file)),
+          doc(std::make_unique<pugi::xml_document>()) {
+        for (size_t i = 0; i < text.size(); ++i)
+            if (text[i] == '\n') newlines.push_back(i);
+    }
+    int line_at(size_t offset) const {
+        return int(std::upper_bound(newlines.begin(), newlines.end(), offset) - newlines.begin()) + 1;
+    }
+};
+
 class Importer {
 public:
     Importer(const std::string& text, const std::string& file, const MitsubaOptions& opt)
-        : text_(text), file_(file), fname_(std::make_shared<const std::string>(file)), opt_(opt) {
-        for (size_t i = 0; i < text_.size(); ++i)
-            if (text_[i] == '\n') newlines_.push_back(i);
+        : text_(text), file_(file), opt_(opt) {
+        sources_.push_back(std::make_unique<Source>(text, file));
         dir_ = fs::path(file).parent_path();
         if (dir_.empty()) dir_ = ".";
     }
@@ -58,20 +75,25 @@ public:
 private:
     const FileGate& gate() const { return opt_.files ? *opt_.files : *FileGate::unconfined(); }
 
-    // ---- positions, messages
+    // ---- positions, messages: every node is named by the file it was written in.
+    const Source& source_of(pugi::xml_node n) const {
+        pugi::xml_node root = n.root();
+        for (const auto& s : sources_)
+            if (root == *s->doc) return *s;
+        return *sources_.front();
+    }
+    const std::string& file_of(pugi::xml_node n) const { return source_of(n).file; }
+    const std::shared_ptr<const std::string>& fname_of(pugi::xml_node n) const { return source_of(n).fname; }
     int line_of(pugi::xml_node n) const {
         ptrdiff_t off = n.offset_debug();
         if (off < 0) return 0;
-        return int(std::upper_bound(newlines_.begin(), newlines_.end(), size_t(off)) - newlines_.begin()) + 1;
-    }
-    int line_at(size_t offset) const {
-        return int(std::upper_bound(newlines_.begin(), newlines_.end(), offset) - newlines_.begin()) + 1;
+        return source_of(n).line_at(size_t(off));
     }
     [[noreturn]] void fail(pugi::xml_node n, const std::string& key, const std::string& what) const {
-        throw SceneError(fmt::format("{}:{}: {}: {}", file_, line_of(n), key, what));
+        throw SceneError(fmt::format("{}:{}: {}: {}", file_of(n), line_of(n), key, what));
     }
     void warn(pugi::xml_node n, const std::string& key, const std::string& what) {
-        desc_.warnings.push_back(fmt::format("{}:{}: {}: {}", file_, line_of(n), key, what));
+        desc_.warnings.push_back(fmt::format("{}:{}: {}: {}", file_of(n), line_of(n), key, what));
     }
 
     // ---- attributes and $variables
@@ -186,7 +208,7 @@ private:
     Mat4 to_world(pugi::xml_node t, const std::string& key) {
         YAML::Node ops = transform_ops(t, key);
         if (ops.size() == 0) return Mat4{};
-        return parse_to_world(ParamValue(ops, key, fname_, line_of(t)));
+        return parse_to_world(ParamValue(ops, key, fname_of(t), line_of(t)));
     }
 
     // Runs a section parser on a YAML value built from element e, and moves the line of an error
@@ -195,16 +217,16 @@ private:
     auto checked(const std::string& key, pugi::xml_node n, const std::map<std::string, int>& lines, F&& f)
         -> decltype(f(std::declval<ParamValue>())) {
         try {
-            return f(ParamValue(YAML::Node(), key, fname_, line_of(n)));
+            return f(ParamValue(YAML::Node(), key, fname_of(n), line_of(n)));
         } catch (const SceneError& err) {
             std::string msg = err.what();
-            std::string prefix = fmt::format("{}:{}: {}.", file_, line_of(n), key);
+            std::string prefix = fmt::format("{}:{}: {}.", file_of(n), line_of(n), key);
             if (msg.rfind(prefix, 0) == 0) {
                 std::string rest = msg.substr(prefix.size());
                 size_t end = rest.find_first_of(".:[");
                 auto it = lines.find(rest.substr(0, end));
                 if (it != lines.end())
-                    throw SceneError(fmt::format("{}:{}: {}.{}", file_, it->second, key, rest));
+                    throw SceneError(fmt::format("{}:{}: {}.{}", file_of(n), it->second, key, rest));
             }
             throw;
         }
@@ -213,6 +235,13 @@ private:
 
     // ---- sections
     void read_defaults(pugi::xml_node scene);
+    void warn_unused_defines(pugi::xml_node scene);  // after the includes are read
+    // Reads every file that `scene`'s <include>s name (and theirs), through the gate.
+    void load_includes(pugi::xml_node scene, std::vector<std::string>& chain);
+    // The children of a <scene>, an included one's in place of its <include>.
+    void read_scene_children(pugi::xml_node scene);
+    // Every <scene> element: the file's own and the included ones.
+    std::vector<pugi::xml_node> scenes() const;
     void read_integrator(pugi::xml_node n);
     void read_sensor(pugi::xml_node n);
     YAML::Node read_bsdf(pugi::xml_node n, const std::string& key, bool two_sided, std::map<std::string, int>& lines);
@@ -228,10 +257,12 @@ private:
 
     std::string text_;
     std::string file_;
-    std::shared_ptr<const std::string> fname_;
     MitsubaOptions opt_;
-    std::vector<size_t> newlines_;
+    std::vector<std::unique_ptr<Source>> sources_;  // [0]: the scene file
+    std::map<pugi::xml_node, pugi::xml_node> included_;  // <include> -> the <scene> it names
     fs::path dir_;
+    size_t shape_index_ = 0, emitter_index_ = 0;
+    bool have_integrator_ = false;
     bool legacy_ = false;  // Mitsuba 0.x parameter names
     std::map<std::string, std::string> vars_;
     std::map<std::string, pugi::xml_node> ids_;

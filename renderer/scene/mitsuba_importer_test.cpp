@@ -690,7 +690,6 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
   <film type="specfilm"><string name="pixel_format" value="luminance"/><boolean name="banner" value="false"/>
     <rfilter type="mitchell"/></film></sensor>
 <medium type="homogeneous" id="fog"/>
-<include filename="other.xml"/>
 <bsdf type="plastic" id="p"><rgb name="diffuse_reflectance" value="0.2"/></bsdf>
 <bsdf type="roughplastic" id="rp"/>
 <bsdf type="thindielectric" id="thin"/>
@@ -724,7 +723,6 @@ TEST(MitsubaImporter, EverythingUnsupportedIsNamedInAWarning) {
         "sensor.film: parameter 'banner' (<boolean>) is not supported",
         "sensor.film.rfilter: reconstruction filter 'mitchell' is not supported",
         "medium: <medium type=\"homogeneous\"> is not supported and was ignored",
-        "include: <include> is not supported and was ignored",
         "bsdf(n): the null BSDF",
         "bsdf(h): BSDF 'hair' is not supported; using a grey diffuse",
         "bsdf(bump): BSDF 'blendbsdf' is not supported; using its nested BSDF",
