@@ -2,6 +2,7 @@
 #include <fstream>
 #include <functional>
 
+#include "scene/blackbody.h"
 #include "scene/mitsuba_importer_impl.h"
 #include "scene/scene_files.h"
 #include "texture/image.h"
@@ -108,6 +109,27 @@ YAML::Node Importer::colour(pugi::xml_node c, const std::string& key, bool textu
         Rgb a = texture_average(c, key);
         return list3(fmt::format("{}", a.x), fmt::format("{}", a.y), fmt::format("{}", a.z));
     }
+    // A black body: Mitsuba 0.6's <blackbody temperature="5000K" scale="s"/>, or 3's
+    // <spectrum type="blackbody"> with a <float name="temperature">. Units in scene/blackbody.h.
+    if (tag == "blackbody" || (tag == "spectrum" && c.attribute("type"))) {
+        std::string kelvin, scale = "1";
+        if (tag == "blackbody") {
+            kelvin = required_attr(c, "temperature", key);
+            if (c.attribute("scale")) scale = attr(c, "scale", key);
+        } else {
+            std::string type = attr(c, "type", key);
+            if (type != "blackbody") fail(c, key, "spectrum type '" + type + "' is not supported (blackbody is)");
+            for (pugi::xml_node p : c.children())
+                if (std::string(p.attribute("name").as_string()) == "temperature") kelvin = attr(p, "value", key);
+            if (kelvin.empty()) fail(c, key, "a blackbody spectrum needs a temperature");
+        }
+        if (!kelvin.empty() && (kelvin.back() == 'K' || kelvin.back() == 'k')) kelvin.pop_back();
+        const double t = to_double(kelvin, c, key), k = to_double(scale, c, key);
+        if (!(t > 0)) fail(c, key, "a blackbody temperature must be positive, got " + kelvin);
+        Rgb rgb = blackbody_linear_srgb(t);
+        return list3(fmt::format("{}", k * std::max(0.f, rgb.x)), fmt::format("{}", k * std::max(0.f, rgb.y)),
+                     fmt::format("{}", k * std::max(0.f, rgb.z)));
+    }
     std::string v = attr(c, "value", key);
     if (tag == "float") return YAML::Node(v);
     if (tag == "rgb" || tag == "srgb") {
@@ -145,7 +167,7 @@ YAML::Node Importer::colour(pugi::xml_node c, const std::string& key, bool textu
         warn(c, key, "a sampled spectrum is approximated by its average value (Omega renders RGB)");
         return YAML::Node(fmt::format("{}", sum / n));
     }
-    fail(c, key, "expected a colour (<rgb>, <spectrum>, <float> or a bitmap <texture>), got <" + tag + ">");
+    fail(c, key, "expected a colour (<rgb>, <spectrum>, <blackbody>, <float> or a bitmap <texture>), got <" + tag + ">");
 }
 
 // A bsdf element as a YAML material mapping (for parse_material_value).

@@ -135,7 +135,7 @@ private:
     // ---- parameters
     static bool is_value_tag(const std::string& t) {
         return t == "float" || t == "integer" || t == "boolean" || t == "string" || t == "rgb" || t == "srgb" ||
-               t == "spectrum" || t == "point" || t == "vector" || t == "transform";
+               t == "spectrum" || t == "blackbody" || t == "point" || t == "vector" || t == "transform";
     }
     // The child <tag name="name"> of e (any value tag, or a texture/ref for colours), marked used.
     pugi::xml_node find_param(Elem& e, const std::string& name) {
