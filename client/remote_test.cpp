@@ -7,6 +7,7 @@
 #include "asset_scan.h"
 #include "scene/gltf_importer.h"
 #include "scene/scene_writer.h"
+#include "shared_data.h"
 #include "job_commands.h"
 #include "submit_command.h"
 #include "test_fake_daemon.h"
@@ -134,7 +135,7 @@ TEST(AssetScan, FilesAMeshNamesTravelBesideIt) {
 // .bin buffer Assimp reads for it and the base colour texture go as assets, under their own names.
 TEST(AssetScan, ImportedGltfTravelsWithItsBufferAndTexture) {
     TempDir d;
-    const fs::path data = fs::path(__FILE__).parent_path().parent_path() / "tests/data/gltf";
+    const fs::path data = fs::path(omega::test::source_dir()) / "tests/data/gltf";
     for (const char* f : {"blender_scene.gltf", "blender_scene.bin", "checker.png", "roughness.png"})
         fs::copy_file(data / f, d.path / f);
     write_scene_file(import_gltf_file((d.path / "blender_scene.gltf").string()), (d.path / "s.yaml").string());

@@ -9,12 +9,11 @@
 
 #include "scene/scene_desc.h"
 #include "scene/scene_error.h"
+#include "shared_data.h"
 
 namespace omega::test {
 
-inline std::filesystem::path source_root() {
-    return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path();
-}
+inline std::filesystem::path source_root() { return source_dir(); }
 
 // A fresh folder under the system temp dir, removed at the end of the test.
 struct TempDir {

@@ -7,6 +7,8 @@
 
 namespace omega::test {
 
+std::string source_dir() { return OMEGA_SOURCE_DIR; }
+
 std::string shared_path(const std::string& rel) {
     return (std::filesystem::path(OMEGA_SOURCE_DIR) / ".." / "shared" / rel).lexically_normal().string();
 }

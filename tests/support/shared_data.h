@@ -6,6 +6,10 @@
 
 namespace omega::test {
 
+// The source tree (OMEGA_SOURCE_DIR, absolute): not __FILE__, which a compiler launcher such as
+// ccache with base_dir may make relative to the build directory.
+std::string source_dir();
+
 // OMEGA_SOURCE_DIR/../shared/<rel>.
 std::string shared_path(const std::string& rel);
 
