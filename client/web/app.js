@@ -230,7 +230,7 @@ function drawCurve() {
   const X = (t) => 31 + (t / tMax) * (c.width - 33), Y = (l) => 1 + ((hi - l) / Math.max(hi - lo, 1)) * (c.height - 23);
   g.fillStyle = "#888";
   g.font = "10px sans-serif";
-  for (let l = lo; l <= hi; ++l) g.fillText(`1e${l}`, 0, Y(l) + 3);
+  for (let l = lo; l <= hi; ++l) g.fillText(`1e${l}`, 0, Math.min(Math.max(Y(l) + 3, 9), c.height - 21));
   g.fillText(`${tMax.toFixed(1)} s`, c.width - 40, c.height - 6);
   g.strokeStyle = "#e63";
   g.beginPath();
