@@ -32,6 +32,21 @@ constexpr KindName kKinds[] = {
     {ViewCommandKind::fetch, "fetch"},
 };
 
+// User names and tokens are printable text: no C0 control character or DEL, and none of the
+// code points YAML folds as line breaks (U+0085, U+2028, U+2029) or drops (U+FEFF), so that
+// the canonical JSON of a command reads back as the same command (fuzz_view_messages found a
+// NEL turned into a space).
+bool printable(std::string_view s) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+        const auto c = static_cast<unsigned char>(s[i]);
+        if (c < 0x20 || c == 0x7f) return false;
+        if (c == 0xc2 && i + 1 < s.size() && static_cast<unsigned char>(s[i + 1]) == 0x85) return false;
+        if (c == 0xe2 && s.substr(i, 3) >= "\xe2\x80\xa8" && s.substr(i, 3) <= "\xe2\x80\xa9") return false;
+        if (s.substr(i, 3) == "\xef\xbb\xbf") return false;
+    }
+    return true;
+}
+
 bool takes_job(ViewCommandKind k) {
     return k != ViewCommandKind::login && k != ViewCommandKind::list && k != ViewCommandKind::close;
 }
@@ -121,6 +136,8 @@ proto::Result<ViewCommand, DecodeError> decode_view_command(std::string_view tex
     if (c.kind == ViewCommandKind::login) {
         c.user = r.str("user", kMaxCredentialBytes);
         c.token = r.str("token", kMaxCredentialBytes);
+        if (r.ok() && !printable(c.user)) r.fail(DecodeError::invalid_value, "user", "not printable text");
+        if (r.ok() && !printable(c.token)) r.fail(DecodeError::invalid_value, "token", "not printable text");
     }
     if (!r.ok()) return r.failure();
     return c;

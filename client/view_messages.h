@@ -25,7 +25,7 @@ enum class ViewCommandKind { login, list, open, close, cancel, pause, resume, se
 std::string_view to_string(ViewCommandKind k);
 
 // One message from the page: {"type": T, "id": N, ...}. `id` (u64, chosen by the page) is echoed
-// by the reply. login: user, token (strings, at most 1024 bytes); list, close: nothing more; open,
+// by the reply. login: user, token (printable strings, at most 1024 bytes); list, close: nothing more; open,
 // cancel, pause, resume, fetch: job (u64); set_priority: job, priority (i64 in [-1000, 1000]).
 struct ViewCommand {
     ViewCommandKind kind = ViewCommandKind::list;

@@ -53,6 +53,8 @@ TEST(ViewMessages, RefusesMalformedInputNamingTheField) {
         {std::string("{\"type\": \"list\", \"id\": 1, \"x\": \"\xff\"}"), "UTF-8"},
         {"{\"type\": \"login\", \"id\": 1, \"user\": \"a\", \"token\": \"" + std::string(5000, 'x') + "\"}", "4096"},
         {std::string(3000, '[') + std::string(3000, ']'), ""},
+        {"{\"type\": \"login\", \"id\": 1, \"user\": \"a\\u0085b\", \"token\": \"t\"}", "user: not printable"},
+        {"{\"type\": \"login\", \"id\": 1, \"user\": \"a\", \"token\": \"t\\u0000\"}", "token: not printable"},
     };
     for (const auto& c : cases) {
         auto r = decode_view_command(c.text);
@@ -66,7 +68,7 @@ TEST(ViewMessages, CommandsRoundTrip) {
     c.kind = ViewCommandKind::login;
     c.id = 12;
     c.user = "bj\xc3\xb6rk";
-    c.token = "a\"b\\c\n";
+    c.token = "a\"b\\c: [x], {y}";
     auto r = decode_view_command(encode_view_command(c));
     ASSERT_TRUE(r) << r.message();
     EXPECT_EQ(r->user, c.user);

@@ -2,12 +2,15 @@
 puppeteer-core (tests/web/browser.mjs). A real omegad with two TCP users, a real `omega view`
 bridge, and the page as a user sees it:
 
+- `--listen` off loopback is refused, and so is a WebSocket upgrade from a foreign Origin;
 - a wrong token is refused (the page shows auth_failed, and nothing is listed);
 - the job list names the jobs as `omega list` does, with controls only on the user's own jobs;
 - an open running job receives float tiles to its end; the canvas then equals the EXR fetched
   over the protocol after the same tone map (exposure +0.5), within 8-bit rounding, and holds no
   NaN; the error view differs; the download is the fetched file;
 - clicks on pause, then cancel, pause and cancel the job (checked via the protocol);
+- over the daemon's Unix socket, a wrong access key is refused and the printed one logs in as
+  the uid running `omega view`, with no controls on others' jobs;
 - a screenshot is kept in the build tree (its path is printed).
 
 Usage: python3 test_web.py OMEGAD OMEGA EXR_COMPARE SOURCE_DIR ARTEFACT_DIR"""
@@ -83,16 +86,34 @@ class View:
         self.proc = subprocess.Popen([OMEGA, "view", "--host", host, "--listen", "127.0.0.1:0", "--list-interval", "0.3"],
                                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         self.lines = []
-        first = self.proc.stdout.readline()
+        first, second = self.proc.stdout.readline(), self.proc.stdout.readline()
         m = re.search(r"serving (http://127\.0\.0\.1:\d+/)", first)
         assert m, f"omega view printed {first!r}"
         self.url = m.group(1)
+        m = re.search(r"#key=([0-9a-f]{32})$", second.strip())
+        assert m, f"omega view printed {second!r}"
+        self.key = m.group(1)
         threading.Thread(target=lambda: self.lines.extend(self.proc.stdout), daemon=True).start()
 
     def stop(self):
         self.proc.terminate()
         rc = self.proc.wait(15)
         assert rc == 0, f"omega view exited {rc}: {''.join(self.lines)}"
+
+
+def upgrade_status(url, origin):
+    """The HTTP status of a WebSocket upgrade of /ws sent with this Origin (0: closed unanswered)."""
+    import http.client
+    host = url.split("/")[2]
+    c = http.client.HTTPConnection(host, timeout=10)
+    try:
+        c.request("GET", "/ws", headers={"Upgrade": "websocket", "Connection": "Upgrade", "Origin": origin,
+                                        "Sec-WebSocket-Key": "dGhlIHNhbXBsZSBub25jZQ==", "Sec-WebSocket-Version": "13"})
+        return c.getresponse().status
+    except (http.client.RemoteDisconnected, ConnectionError):
+        return 0
+    finally:
+        c.close()
 
 
 def tone_map(rgb, exposure, gamma):
@@ -118,8 +139,14 @@ def test_job_page(tmp, daemons):
     daemons.append(d)
     alice, bob = login(d, "alice", ALICE), login(d, "bob", BOB)
     theirs = submit(bob, "bobs-frame", halt=op.halt(spp=4), priority=-5)  # someone else's: no controls
+    r = subprocess.run([OMEGA, "view", "--host", d.tcp, "--listen", "0.0.0.0:0"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "loopback only" in r.stderr, (r.returncode, r.stderr)
     view = View(d.tcp)
+    # A foreign web page may not open the WebSocket (its Origin is not the page's own).
+    assert upgrade_status(view.url, view.url.rstrip("/")) == 101
+    assert upgrade_status(view.url, "http://evil.example") != 101
     b = Browser()
+    unix_view = None
     try:
         b("goto", url=view.url)
         # A wrong token: refused, nothing listed.
@@ -196,10 +223,27 @@ def test_job_page(tmp, daemons):
         wait_state(alice, hold, ["cancelled"], timeout=30)
         b("wait", js=f"document.querySelector('#jobs tr[data-job=\"{hold}\"]').cells[1].textContent === 'cancelled'")
         assert bob.job("status", theirs)["state"] in ("queued", "running", "done"), "bob's job was touched"
+
+        # Over the daemon's Unix socket the page proves itself with the access key omega view
+        # printed; it then acts as the uid running omega view, which owns none of these jobs.
+        unix_view = View(d.unix)
+        b("goto", url=unix_view.url)
+        b("type", selector="#token", text="0" * 32)
+        b("click", selector="#login-button")
+        msg = b("wait", js="!document.getElementById('login-error').hidden && document.getElementById('login-error').textContent")
+        assert msg.startswith("auth_failed"), msg
+        b("type", selector="#token", text=unix_view.key)
+        b("click", selector="#login-button")
+        who = b("wait", js="!document.getElementById('list').hidden && document.getElementById('who').textContent")
+        assert who.startswith(f"{os.getuid()} @"), who
+        b("wait", js=f"document.querySelector('#jobs tr[data-job=\"{live}\"]')")
+        assert b("eval", js="document.querySelectorAll('#jobs button').length") == 0
         print(f"screenshot: {shot} ({tiles} tiles seen early; {time.monotonic() - t0:.1f} s)", flush=True)
     finally:
         b.close()
         view.stop()
+        if unix_view:
+            unix_view.stop()
 
 
 if __name__ == "__main__":
