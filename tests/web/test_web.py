@@ -8,7 +8,8 @@ bridge, and the page as a user sees it:
 - an open running job receives float tiles to its end; the canvas then equals the EXR fetched
   over the protocol after the same tone map (exposure +0.5), within 8-bit rounding, and holds no
   NaN; the error view differs; the download is the fetched file;
-- clicks on pause, then cancel, pause and cancel the job (checked via the protocol);
+- the priority field and clicks on pause, resume, pause and cancel act on the job (each checked
+  via the protocol);
 - over the daemon's Unix socket, a wrong access key is refused and the printed one logs in as
   the uid running `omega view`, with no controls on others' jobs;
 - a screenshot is kept in the build tree (its path is printed).
@@ -210,10 +211,23 @@ def test_job_page(tmp, daemons):
         shot = os.path.join(ARTEFACTS, "web_job_page.png")
         b("screenshot", path=shot)
 
-        # Pause, then cancel, from the page; each checked via the protocol.
+        # Priority, pause, resume, pause and cancel from the page; each checked via the protocol.
         hold = submit(alice, "web-hold", halt=op.halt(spp=1 << 20))
         b("click", selector="#back")
         wait_state(alice, hold, ["running"], timeout=30)
+        b("wait", js=f"document.querySelector('button.pause[data-job=\"{hold}\"]')")
+        # Priority, typed into the row's field (applied on change), checked via the protocol.
+        b("type", selector=f"input.priority[data-job=\"{hold}\"]", text="7")
+        b("eval", js="(() => { const e = document.activeElement; e.dispatchEvent(new Event('change')); e.blur(); return 1; })()")
+        deadline = time.monotonic() + 20
+        while alice.job("status", hold)["priority"] != 7:
+            assert time.monotonic() < deadline, "set_priority from the page did not arrive"
+            time.sleep(0.1)
+        b("click", selector=f"button.pause[data-job=\"{hold}\"]")
+        wait_state(alice, hold, ["paused"], timeout=30)
+        b("wait", js=f"document.querySelector('button.resume[data-job=\"{hold}\"]')")
+        b("click", selector=f"button.resume[data-job=\"{hold}\"]")
+        wait_state(alice, hold, ["running", "queued"], timeout=30)
         b("wait", js=f"document.querySelector('button.pause[data-job=\"{hold}\"]')")
         b("click", selector=f"button.pause[data-job=\"{hold}\"]")
         wait_state(alice, hold, ["paused"], timeout=30)
