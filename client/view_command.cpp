@@ -7,7 +7,6 @@
 // loop and gains no listener.
 #include "view_command.h"
 
-#include <arpa/inet.h>
 #include <civetweb.h>
 #include <fmt/format.h>
 #include <openssl/rand.h>
@@ -18,6 +17,7 @@
 #include <mutex>
 
 #include "remote_common.h"
+#include "view_messages.h"
 #include "view_session.h"
 
 #ifndef OMEGA_WEB_ROOT
@@ -47,26 +47,11 @@ std::optional<std::pair<std::string, int>> split_host_port(const std::string& s)
     return std::pair{host, p};
 }
 
-// The Host header's host, for the DNS-rebinding check.
-std::string host_of_header(const char* h) {
-    if (!h) return {};
-    std::string s(h);
-    if (!s.empty() && s.front() == '[') {
-        const auto e = s.find(']');
-        return e == std::string::npos ? std::string() : s.substr(1, e - 1);
-    }
-    return s.substr(0, s.find(':'));
-}
-
-// Civetweb worker (WebSocket upgrade request): accepts only a loopback Host (no DNS rebinding)
-// and an Origin, when the browser sends one, of this very server (no cross-site WebSocket).
-// Returns 0 to accept, 1 to refuse (civetweb's convention).
+// Civetweb worker (WebSocket upgrade request): the DNS-rebinding and cross-site checks of
+// websocket_upgrade_allowed (view_messages.h). Returns 0 to accept, 1 to refuse (civetweb's
+// convention).
 int on_ws_connect(const mg_connection* c, void*) {
-    const char* host = mg_get_header(c, "Host");
-    if (!host || !is_loopback_host(host_of_header(host))) return 1;
-    const char* origin = mg_get_header(c, "Origin");
-    if (origin && std::string(origin) != std::string("http://") + host) return 1;
-    return 0;
+    return websocket_upgrade_allowed(mg_get_header(c, "Host"), mg_get_header(c, "Origin")) ? 0 : 1;
 }
 
 // Civetweb worker of the new WebSocket: starts its session. No lock: the connection is this
@@ -108,12 +93,6 @@ std::string random_key() {
 }
 
 }  // namespace
-
-bool is_loopback_host(const std::string& host) {
-    if (host == "localhost" || host == "::1") return true;
-    in_addr a{};
-    return inet_pton(AF_INET, host.c_str(), &a) == 1 && (ntohl(a.s_addr) >> 24) == 127;
-}
 
 void add_view_command(CLI::App& app, ViewArgs& a) {
     auto* cmd = app.add_subcommand("view", "Serve the live job page to a browser on this machine (docs/web.md)");

@@ -22,7 +22,4 @@ void add_view_command(CLI::App& app, ViewArgs& args);
 // Serves until SIGINT or SIGTERM. Called on the main thread.
 int run_view(const ViewArgs& args);
 
-// True for 127.0.0.0/8, ::1 and "localhost" (the only hosts --listen accepts).
-bool is_loopback_host(const std::string& host);
-
 }  // namespace omega::client

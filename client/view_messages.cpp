@@ -1,5 +1,6 @@
 #include "view_messages.h"
 
+#include <arpa/inet.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -209,6 +210,31 @@ std::string view_warnings(std::uint64_t id, std::uint64_t job, const std::vector
     w.begin_map().field("type", "warnings").field_u("id", id).field_u("job", job).key("warnings").begin_list();
     for (const auto& s : warnings) w.str(s);
     return w.end_list().field_u("nonfinite", nonfinite).end_map().take();
+}
+
+bool is_loopback_host(std::string_view host) {
+    if (host == "localhost" || host == "::1") return true;
+    if (host.size() > 15) return false;
+    const std::string h(host);
+    in_addr a{};
+    return inet_pton(AF_INET, h.c_str(), &a) == 1 && (ntohl(a.s_addr) >> 24) == 127;
+}
+
+bool websocket_upgrade_allowed(const char* host, const char* origin) {
+    if (!host) return false;
+    const std::string_view h(host);
+    std::string_view name;  // the host part: "[v6]:port", "[v6]", "name:port" or "name"
+    if (!h.empty() && h.front() == '[') {
+        const auto e = h.find(']');
+        if (e == std::string_view::npos) return false;
+        name = h.substr(1, e - 1);
+        const auto rest = h.substr(e + 1);
+        if (!rest.empty() && rest.front() != ':') return false;
+    } else {
+        name = h.substr(0, h.find(':'));
+    }
+    if (!is_loopback_host(name)) return false;
+    return !origin || std::string_view(origin) == "http://" + std::string(h);
 }
 
 std::string pack_float_tile(const FloatTile& t) {

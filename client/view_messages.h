@@ -42,6 +42,14 @@ protocol::Result<ViewCommand, protocol::DecodeError> decode_view_command(std::st
 // The canonical JSON of a command (the login's token included); decode(encode(c)) == c.
 std::string encode_view_command(const ViewCommand& c);
 
+// ---- the WebSocket upgrade request ----
+// True for 127.0.0.0/8, ::1 and "localhost" (the only hosts `omega view --listen` accepts).
+bool is_loopback_host(std::string_view host);
+// Whether to accept a WebSocket upgrade with these Host and Origin headers (null: absent): the
+// Host must name a loopback host (no DNS rebinding), and the Origin, when the browser sends one,
+// must be "http://" + Host, the page itself (no cross-site WebSocket hijacking).
+bool websocket_upgrade_allowed(const char* host, const char* origin);
+
 // ---- replies and events, JSON text (one line) ----
 // {"type": "welcome", "id", "user", "server", "auth"}
 std::string view_welcome(std::uint64_t id, std::string_view user, std::string_view server, std::string_view auth);

@@ -135,5 +135,24 @@ TEST(ViewMessages, JobListCarriesTheListColumnsAndOwnership) {
     EXPECT_NE(s.find(R"("mine": 0})"), std::string::npos) << s;
 }
 
+TEST(ViewMessages, WebSocketUpgradeOnlyFromThePageOnLoopback) {
+    EXPECT_TRUE(websocket_upgrade_allowed("127.0.0.1:7180", nullptr));
+    EXPECT_TRUE(websocket_upgrade_allowed("127.0.0.1:7180", "http://127.0.0.1:7180"));
+    EXPECT_TRUE(websocket_upgrade_allowed("localhost:7180", "http://localhost:7180"));
+    EXPECT_TRUE(websocket_upgrade_allowed("[::1]:7180", "http://[::1]:7180"));
+    EXPECT_TRUE(websocket_upgrade_allowed("127.1.2.3", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed(nullptr, nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("127.0.0.1:7180", "http://evil.example"));
+    EXPECT_FALSE(websocket_upgrade_allowed("127.0.0.1:7180", "http://127.0.0.1:7181"));
+    EXPECT_FALSE(websocket_upgrade_allowed("evil.example:7180", "http://evil.example:7180"));  // DNS rebinding
+    EXPECT_FALSE(websocket_upgrade_allowed("128.0.0.1:7180", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("[::2]:7180", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("[::1", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("[::1]x", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("", nullptr));
+    EXPECT_TRUE(is_loopback_host("::1"));
+    EXPECT_FALSE(is_loopback_host("0.0.0.0"));
+}
+
 }  // namespace
 }  // namespace omega::client

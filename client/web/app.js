@@ -140,26 +140,39 @@ function controls(j) {
   return td;
 }
 
+// Updates the table in place: a row, its cells and its controls are replaced only when what
+// they show changes, so a click is never lost to a refresh (the list comes every second).
 function showJobs(jobs) {
   const body = $("jobs").tBodies[0];
   const focused = document.activeElement;
   if (focused && focused.classList.contains("priority")) return;  // don't replace what is being typed
-  body.replaceChildren();
+  const rows = new Map([...body.rows].map((r) => [Number(r.dataset.job), r]));
   state.jobs.clear();
-  for (const j of jobs) {
+  jobs.forEach((j, i) => {
     state.jobs.set(j.job, j);
-    const tr = document.createElement("tr");
-    tr.dataset.job = j.job;
-    tr.className = "state-" + j.state + (j.mine ? " mine" : "");
-    for (const v of [j.job, j.state, j.priority, j.owner, j.progress_text, rate(j.progress.samples_per_s), j.label]) {
-      const td = document.createElement("td");
-      td.textContent = v;
-      tr.append(td);
+    let tr = rows.get(j.job);
+    rows.delete(j.job);
+    if (!tr) {
+      tr = document.createElement("tr");
+      tr.dataset.job = j.job;
+      for (let k = 0; k < 8; ++k) tr.append(document.createElement("td"));
+      tr.onclick = () => send({ type: "open", job: j.job });
     }
-    tr.append(controls(j));
-    tr.onclick = () => send({ type: "open", job: j.job });
-    body.append(tr);
-  }
+    tr.className = "state-" + j.state + (j.mine ? " mine" : "");
+    [j.job, j.state, j.priority, j.owner, j.progress_text, rate(j.progress.samples_per_s), j.label].forEach((v, k) => {
+      if (tr.cells[k].textContent !== String(v)) tr.cells[k].textContent = v;
+    });
+    // Which buttons the row shows: queued and running show the same ones, kept across the change.
+    const key = !j.mine ? "none" : j.state === "paused" ? "paused" : ["queued", "running"].includes(j.state) ? "live" : "none";
+    if (tr.dataset.controls !== key) {
+      tr.dataset.controls = key;
+      tr.replaceChild(controls(j), tr.cells[7]);
+    }
+    const pri = tr.cells[7].querySelector("input.priority");
+    if (pri && pri.value !== String(j.priority)) pri.value = j.priority;
+    if (body.rows[i] !== tr) body.insertBefore(tr, body.rows[i] || null);
+  });
+  for (const tr of rows.values()) tr.remove();
 }
 
 // ---------------------------------------------------------------- job view

@@ -223,6 +223,7 @@ def test_job_page(tmp, daemons):
         while alice.job("status", hold)["priority"] != 7:
             assert time.monotonic() < deadline, "set_priority from the page did not arrive"
             time.sleep(0.1)
+        b("wait", js=f"document.querySelector('#jobs tr[data-job=\"{hold}\"]').cells[2].textContent === '7'")
         b("click", selector=f"button.pause[data-job=\"{hold}\"]")
         wait_state(alice, hold, ["paused"], timeout=30)
         b("wait", js=f"document.querySelector('button.resume[data-job=\"{hold}\"]')")
