@@ -177,9 +177,11 @@ def test_job_page(tmp, daemons):
 
         # The running job: float tiles arrive and the image fills in, pass after pass, to the end.
         b("click", selector=f"#jobs tr[data-job=\"{live}\"] td:nth-child(7)")
-        tiles = b("wait", js="window.omegaView.tiles >= 8 && window.omegaView.tiles", timeout=30)
+        b("wait", js="window.omegaView.tiles >= 1", timeout=30)
         assert b("eval", js="document.getElementById('image').width") == 64
         b("wait", js="document.getElementById('job-status').dataset.state === 'done'", timeout=60)
+        tiles = b("eval", js="window.omegaView.tiles")
+        assert tiles >= 8, f"only {tiles} tiles: the 4 rects did not each arrive at least twice while rendering"
         assert b("eval", js="window.omegaView.curve.length") >= 2  # the error curve grew
         b("eval", js="(() => { const e = document.getElementById('exposure'); e.value = '0.5';"
                      " e.dispatchEvent(new Event('input')); return 1; })()")
@@ -253,7 +255,7 @@ def test_job_page(tmp, daemons):
         assert who.startswith(f"{os.getuid()} @"), who
         b("wait", js=f"document.querySelector('#jobs tr[data-job=\"{live}\"]')")
         assert b("eval", js="document.querySelectorAll('#jobs button').length") == 0
-        print(f"screenshot: {shot} ({tiles} tiles seen early; {time.monotonic() - t0:.1f} s)", flush=True)
+        print(f"screenshot: {shot} ({tiles} tiles; {time.monotonic() - t0:.1f} s)", flush=True)
     finally:
         b.close()
         view.stop()
