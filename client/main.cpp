@@ -12,6 +12,7 @@
 #include "import_command.h"
 #include "render_command.h"
 #include "submit_command.h"
+#include "view_command.h"
 
 int main(int argc, char** argv) {
     CLI::App app{"omega: unbiased light transport renderer and render-daemon client"};
@@ -32,6 +33,8 @@ int main(int argc, char** argv) {
     omega::add_compare_command(app, compare);
     omega::MergeArgs merge;
     omega::add_merge_command(app, merge);
+    omega::client::ViewArgs view;
+    omega::client::add_view_command(app, view);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -47,6 +50,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("converge")) return omega::run_converge(converge);
         if (app.got_subcommand("compare")) return omega::run_compare(compare);
         if (app.got_subcommand("merge")) return omega::run_merge(merge);
+        if (app.got_subcommand("view")) return omega::client::run_view(view);
     } catch (const std::exception& e) {
         fmt::print(stderr, "omega: internal error: {}\n", e.what());
         return 1;
