@@ -592,7 +592,8 @@ LightDesc parse_light(const ParamValue& item) {
     l.type = ParamBag::enum_value<LightType>(b.require("type"), {{"point", LightType::Point},
                                                                  {"spot", LightType::Spot},
                                                                  {"directional", LightType::Directional},
-                                                                 {"constant", LightType::Constant}});
+                                                                 {"constant", LightType::Constant},
+                                                                 {"envmap", LightType::EnvMap}});
     switch (l.type) {
         case LightType::Point:
             l.position = b.get_vec3("position", l.position);
@@ -618,6 +619,15 @@ LightDesc parse_light(const ParamValue& item) {
             break;
         }
         case LightType::Constant: l.radiance = required_rgb_nonneg(b, "radiance"); break;
+        case LightType::EnvMap: {
+            NamedFile f = scene_file(b.require("file"));
+            l.file = f.file;
+            l.written = f.written;
+            l.file_loc = f.loc;
+            l.scale = float_in(b, "scale", 1.f, 0, false, kInf, true);
+            if (auto v = b.get("to_world")) l.to_world = parse_to_world(*v);
+            break;
+        }
     }
     b.check_unused();
     return l;

@@ -238,6 +238,11 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
                                  rgb(l.irradiance));
                 break;
             case LightType::Constant: o += fmt::format("  - {{type: constant, radiance: {}}}\n", rgb(l.radiance)); break;
+            case LightType::EnvMap:
+                o += fmt::format("  - {{type: envmap, file: {}, scale: {}", q(rel_path(l.file, base_dir)), num(l.scale));
+                if (!is_identity(l.to_world)) o += fmt::format(", to_world: {}", matrix(l.to_world));
+                o += "}\n";
+                break;
         }
     }
     return o;
