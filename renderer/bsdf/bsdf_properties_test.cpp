@@ -56,6 +56,9 @@ PlasticBsdf plastic(float alpha, MicrofacetType t = MicrofacetType::GGX, bool no
 std::vector<Named> rough_models() {
     return {{"diffuse", DiffuseBsdf{{0.8f, 0.5f, 0.2f}, true}},
             {"diffuse_one_sided", DiffuseBsdf{{0.8f, 0.5f, 0.2f}, false}},
+            {"roughdiffuse", DiffuseBsdf{{0.8f, 0.5f, 0.2f}, true, nullptr, 0.5f, false}},
+            {"roughdiffuse_fast_one_sided", DiffuseBsdf{{0.8f, 0.5f, 0.2f}, false, nullptr, 0.3f, true}},
+            {"roughdiffuse_extreme", DiffuseBsdf{{0.9f, 0.9f, 0.9f}, true, nullptr, 3.f, false}},
             {"conductor_ggx", conductor(MicrofacetType::GGX, 0.3f, 0.3f)},
             {"conductor_beckmann_aniso", conductor(MicrofacetType::Beckmann, 0.1f, 0.5f)},
             {"conductor_ggx_aniso", conductor(MicrofacetType::GGX, 0.6f, 0.15f)},
@@ -169,6 +172,9 @@ TEST(BsdfProperties, WhiteFurnaceAlbedoAtMostOne) {
     // Importance mode gives the flux albedo, which must not exceed 1 (radiance mode scales
     // refraction by 1/etap^2 and may legitimately exceed 1 from inside a denser medium).
     std::vector<Named> models = {{"diffuse_white", DiffuseBsdf{{1, 1, 1}, true}},
+                                 {"roughdiffuse_white", DiffuseBsdf{{1, 1, 1}, true, nullptr, 0.5f, false}},
+                                 {"roughdiffuse_white_extreme", DiffuseBsdf{{1, 1, 1}, true, nullptr, 5.f, false}},
+                                 {"roughdiffuse_white_fast", DiffuseBsdf{{1, 1, 1}, true, nullptr, 1.f, true}},
                                  {"conductor_ggx_F1", conductor(MicrofacetType::GGX, 0.5f, 0.5f, false)},
                                  {"conductor_beckmann_F1", conductor(MicrofacetType::Beckmann, 1.f, 0.3f, false)},
                                  {"dielectric_ggx", dielectric(MicrofacetType::GGX, 0.5f, 0.5f)},
