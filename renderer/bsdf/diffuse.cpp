@@ -10,8 +10,10 @@
 // with a = max(theta_i, theta_o), b = min(theta_i, theta_o). Both forms are symmetric in wi, wo
 // (reciprocal), so there is no adjoint to take. Sampling is cosine-weighted (as in Mitsuba);
 // pdf_sa is the cosine density in solid angle. alpha = 0 gives sigma = 0: exactly Lambert.
-// Approximation: none beyond the model's own (the qualitative model is itself a fit; its albedo
-// is not exactly bounded by rho, the properties test checks it stays <= 1 for rho = 1).
+// Approximations: none beyond the model's own (the qualitative model is itself a fit: at rho = 1
+// its albedo exceeds 1 by up to ~5% at grazing incidence, see bsdf_properties_test), except that
+// the full model's rare negative values at grazing, opposite directions are clamped to 0, and
+// tan((a + b) / 2) uses the cosines directly (finite where both directions graze).
 #include <cmath>
 
 #include "bsdf/models.h"
@@ -54,11 +56,16 @@ Rgb oren_nayar(const DiffuseBsdf& b, const Rgb& rho, const Vec3& wo, const Vec3&
     const float C3 = 0.125f * tmp * tmp2 * tmp2;
     const float C4 = 0.17f * sigma2 / (sigma2 + 0.13f);
     C2 *= cos_dphi > 0 ? sin_a : sin_a - tmp3 * tmp3 * tmp3;
-    // tan((alpha + beta) / 2) by the half-angle formula.
-    const float tan_half = (sin_a + sin_b) / (safe_sqrt(1.f - sin_a * sin_a) + safe_sqrt(1.f - sin_b * sin_b));
+    // tan((alpha + beta) / 2) by the half-angle formula, with the cosines themselves (Mitsuba
+    // recomputes them from the sines, which gives 0 / 0 when both directions graze).
+    const float cos_sum = std::max(wi.z + wo.z, 1e-30f);
+    const float tan_half = (sin_a + sin_b) / cos_sum;
     Rgb single = rho * (A + cos_dphi * C2 * tan_b + (1.f - std::abs(cos_dphi)) * C3 * tan_half);
     Rgb twice = rho * rho * (C4 * (1.f - cos_dphi * tmp3 * tmp3));
-    return (single + twice) * kInvPi;
+    // Where both directions graze on opposite sides (cos(dphi) < 0) the C2 term can take the sum
+    // below zero; a BSDF cannot be negative, so it is clamped there (Mitsuba returns it as is).
+    Rgb f = (single + twice) * kInvPi;
+    return {std::max(f.x, 0.f), std::max(f.y, 0.f), std::max(f.z, 0.f)};
 }
 
 // Two-sided surfaces behave as if seen from wo's side (Mitsuba's twosided): flip both directions.

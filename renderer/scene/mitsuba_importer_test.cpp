@@ -629,6 +629,7 @@ TEST(MitsubaImporter, RoughDiffuseAndEnvmap) {
     TempDir dir;
     test::write_image_f32((dir.path / "sky.exr").string(), 4, 3, 3, std::vector<float>(36, 0.5f));
     auto xml = dir.write("scene.xml", R"(<scene version="0.6.0">
+<sensor type="perspective"><float name="fov" value="40"/></sensor>
 <bsdf type="roughdiffuse" id="rd"><rgb name="diffuseReflectance" value="0.3, 0.4, 0.5"/><float name="alpha" value="0.4"/>
   <boolean name="useFastApprox" value="true"/></bsdf>
 <bsdf type="roughdiffuse" id="rd2"/>
