@@ -43,7 +43,7 @@ TEST(TungstenReference, TexturedConductorBdpt) {
 // background and the mirror sphere test the lookup, the others the map's importance sampling and
 // MIS. Light tracing is not run: most pixels see the environment directly or by a mirror.
 const std::vector<std::string> kEnvmap = {"diffuse sphere", "rough sphere", "mirror sphere"};
-TEST(TungstenReference, EnvmapPath) { compare_with_reference("envmap", IntegratorType::Path, 512, "path", kEnvmap); }
+TEST(TungstenReference, EnvmapPath) { compare_with_reference("envmap", IntegratorType::Path, 1024, "path", kEnvmap); }
 TEST(TungstenReference, EnvmapBdpt) { compare_with_reference("envmap", IntegratorType::Bdpt, 128, "bdpt", kEnvmap); }
 
 }  // namespace
