@@ -207,8 +207,8 @@ TEST(IntegratorAgreement, GlassCausticSeenDirectly) {
     expect_agreement(d, 2048, 512, 512, 4, "caustic");
 }
 
-// An envmap (sky gradient, ground, a small bright sun) lighting a diffuse floor, a rough metal
-// cube and a diffuse sphere, seen from above so that no pixel sees the environment directly
+// An envmap (sky gradient, ground, a small bright sun) lighting a rough diffuse (Oren-Nayar) floor,
+// a rough metal cube and a Lambertian sphere, seen from above so that no pixel sees the environment directly
 // (light tracing cannot). Path tracing: NEE by the map's distribution and MIS on escaped rays;
 // light tracing: emission from the bounding disk; bdpt: every strategy, with the map's
 // densities at the vertex at infinity.
@@ -229,6 +229,7 @@ TEST(IntegratorAgreement, EnvMapFromAbove) {
     d.integrator.max_depth = 4;
     d.sensor.to_world = Mat4::look_at({0, 2.6, 0.6}, {0, 0, 0}, {0, 0, 1});
     d.materials["white"] = test::diffuse("white", Rgb(0.7f));
+    d.materials["rough"] = MaterialDesc{"rough", DiffuseBsdf{{0.8f, 0.7f, 0.6f}, true, nullptr, 0.6f, false}, {}};
     ConductorBsdf metal;
     metal.alpha_u = metal.alpha_v = 0.25f;
     metal.distribution = MicrofacetType::GGX;
@@ -237,7 +238,7 @@ TEST(IntegratorAgreement, EnvMapFromAbove) {
     ShapeDesc floor;
     floor.type = ShapeType::Rectangle;
     floor.to_world = Mat4::rotate({1, 0, 0}, -90) * Mat4::scale({3, 3, 1});
-    floor.material = "white";
+    floor.material = "rough";
     d.shapes.push_back(floor);
     ShapeDesc box;
     box.type = ShapeType::Cube;
