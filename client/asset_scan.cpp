@@ -13,7 +13,10 @@
 #include "client_error.h"
 #include "scene/scene_error.h"
 #include "io/file_gate.h"
+#include "scene/gltf_importer.h"
+#include "scene/mitsuba_importer.h"
 #include "scene/scene_parser.h"
+#include "scene/scene_writer.h"
 #include "scene/triangle_mesh.h"
 
 namespace omega::client {
@@ -104,17 +107,27 @@ ScannedScene scan_scene(const std::string& scene_path) {
     ScannedScene s;
     s.path = scene_path;
     s.name = fs::path(scene_path).stem().string();
-    s.yaml = read_file(scene_path);
+    const fs::path dir = fs::path(scene_path).parent_path().empty() ? fs::path(".") : fs::path(scene_path).parent_path();
     SceneDesc desc;
     try {
-        desc = parse_scene_string(s.yaml, scene_path);
+        if (is_mitsuba_path(scene_path) || is_gltf_path(scene_path)) {
+            // Imported here, as `omega import` does: what travels is the v1 YAML it writes (equal
+            // to the import when parsed again, scene_writer.h), with every file it names relative
+            // to the scene's folder, so the walk below finds and sends them.
+            SceneDesc imported = load_scene_file(scene_path);
+            s.yaml = write_scene_yaml(imported, dir.string());
+            desc = parse_scene_string(s.yaml, (dir / (s.name + ".yaml")).string());
+            desc.warnings = imported.warnings;
+        } else {
+            s.yaml = read_file(scene_path);
+            desc = parse_scene_string(s.yaml, scene_path);
+        }
     } catch (const SceneError& e) {
         throw ClientError(kExitBadInput, e.what());
     }
     s.warnings = desc.warnings;
 
     // The parser validated every shape; walk the same YAML for the `file:` strings as written.
-    const fs::path dir = fs::path(scene_path).parent_path().empty() ? fs::path(".") : fs::path(scene_path).parent_path();
     YAML::Node root = YAML::Load(s.yaml);
     YAML::Node shapes = root["shapes"];
     bool rewritten = false;
@@ -175,10 +188,10 @@ ScannedScene scan_scene(const std::string& scene_path) {
         if (mesh) take_inner(a, written);
         add(std::move(a));
     };
-    // Textures: the reflectance of a named or an inline material (a plastic's diffuse_reflectance,
-    // which glTF imports give every textured dielectric, included).
+    // Textures of a named or an inline material: every parameter that takes a bitmap (a
+    // checkerboard names no file, and take() passes over it).
     auto take_material = [&](YAML::Node m) {
-        for (const char* key : {"reflectance", "diffuse_reflectance"})
+        for (const char* key : {"reflectance", "diffuse_reflectance", "specular_reflectance", "opacity", "bump"})
             if (m.IsMap() && m[key] && m[key].IsMap()) take(m[key]);
     };
     if (YAML::Node mats = root["materials"]; mats && mats.IsMap())
@@ -189,6 +202,12 @@ ScannedScene scan_scene(const std::string& scene_path) {
             if (shapes[i].IsMap() && shapes[i]["material"]) take_material(shapes[i]["material"]);
         }
     }
+    // An envmap light's image.
+    if (YAML::Node lights = root["lights"]; lights && lights.IsSequence())
+        for (size_t i = 0; i < lights.size(); ++i)
+            if (lights[i].IsMap() && lights[i]["type"] && lights[i]["type"].IsScalar() &&
+                lights[i]["type"].as<std::string>() == "envmap")
+                take(lights[i]);
     if (rewritten) {
         YAML::Emitter em;
         em << root;

@@ -26,7 +26,9 @@ struct ScannedScene {
 };
 
 // Parses the scene with the renderer's parser (so a bad scene is reported here, with
-// file:line, before anything is sent) and hashes every mesh it references. A file named by a
+// file:line, before anything is sent) and hashes every file it references: meshes (and the
+// files they name), bitmap textures of any material parameter, an envmap's image. A Mitsuba XML
+// or glTF scene is imported first and travels as the YAML `omega import` would write beside it. A file named by a
 // clean relative path (`meshes/bunny.obj`) keeps its name and the YAML travels unchanged; one
 // named by an absolute path or one that climbs out with `..` is renamed
 // `assets/<first 16 hex of its sha256>/<file name>` and the scene's `file:` value rewritten to

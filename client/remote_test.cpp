@@ -110,6 +110,54 @@ TEST(AssetScan, BitmapTexturesTravelAsAssets) {
     EXPECT_EQ(s.yaml.find("../shared"), std::string::npos) << s.yaml;
 }
 
+// Every parameter that takes a bitmap (a conductor's specular_reflectance, a mask's opacity, a
+// bump map, a plastic's diffuse_reflectance) and the envmap's image travel; a checkerboard names
+// no file. The envmap outside the scene's folder is renamed like any other asset.
+TEST(AssetScan, EveryTextureAndTheEnvmapTravel) {
+    TempDir d;
+    for (const char* f : {"scene/t/spec.png", "scene/t/alpha.png", "scene/t/height.png", "scene/t/base.png"})
+        d.write(f, std::string("bytes of ") + f);
+    d.write("skies/sky.exr", "sky bytes");
+    const auto scene = d.write(
+        "scene/s.yaml",
+        "omega: 1\nmaterials:\n"
+        "  metal: {type: conductor, specular_reflectance: {type: bitmap, file: t/spec.png}}\n"
+        "  leaf: {type: diffuse, opacity: {type: bitmap, file: t/alpha.png}, bump: {type: bitmap, file: t/height.png}}\n"
+        "  coat: {type: plastic, diffuse_reflectance: {type: bitmap, file: t/base.png}}\n"
+        "  checks: {type: diffuse, reflectance: {type: checkerboard}}\n"
+        "shapes:\n  - {type: rectangle, material: metal}\n  - {type: rectangle, material: leaf}\n"
+        "  - {type: rectangle, material: coat}\n  - {type: rectangle, material: checks}\n"
+        "lights:\n  - {type: envmap, file: ../skies/sky.exr}\n");
+    ScannedScene s = scan_scene(scene.string());
+    std::map<std::string, std::string> got;
+    for (const auto& a : s.assets) got[a.name] = a.sha256;
+    EXPECT_EQ(got.size(), 5u);
+    for (const char* f : {"t/spec.png", "t/alpha.png", "t/height.png", "t/base.png"})
+        EXPECT_EQ(got[f], sha256_bytes(std::string("bytes of scene/") + f)) << f;
+    const std::string sky = "assets/" + sha256_bytes("sky bytes").substr(0, 16) + "/sky.exr";
+    EXPECT_EQ(got[sky], sha256_bytes("sky bytes"));
+    EXPECT_NE(s.yaml.find(sky), std::string::npos) << s.yaml;
+}
+
+// A Mitsuba XML scene is imported by the client and travels as YAML, with its bitmap and envmap.
+TEST(AssetScan, MitsubaSceneTravelsAsYamlWithItsFiles) {
+    TempDir d;
+    d.write("scene/tex/wood.png", "wood");
+    d.write("scene/sky.exr", "sky");
+    const auto scene = d.write("scene/s.xml", R"(<scene version="3.0.0">
+<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+  <string name="filename" value="tex/wood.png"/></texture></bsdf></shape>
+<emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>
+</scene>)");
+    ScannedScene s = scan_scene(scene.string());
+    EXPECT_NE(s.yaml.find("omega: 1"), std::string::npos) << s.yaml;
+    std::map<std::string, std::string> got;
+    for (const auto& a : s.assets) got[a.name] = a.sha256;
+    ASSERT_EQ(got.size(), 2u) << s.yaml;
+    EXPECT_EQ(got["tex/wood.png"], sha256_bytes("wood"));
+    EXPECT_EQ(got["sky.exr"], sha256_bytes("sky"));
+}
+
 TEST(AssetScan, FilesAMeshNamesTravelBesideIt) {
     TempDir d;
     d.write("scene/meshes/m.obj", std::string("mtllib m.mtl\n") + kTri);

@@ -45,6 +45,9 @@ struct BsdfSample {
 
 struct BitmapTexture;  // texture/bitmap_texture.h
 
+// Lambertian (alpha == 0) or Oren-Nayar rough diffuse (alpha > 0: Mitsuba 0.6's `roughdiffuse`,
+// see diffuse.cpp). Both are reciprocal and cosine-sampled, so the importance BSDF is the
+// radiance one and the density is the same: alpha changes only eval() and the sample weight.
 struct DiffuseBsdf {
     // With a texture: its mean, for the few uses that have no hit at hand (none in rendering).
     Rgb reflectance{0.5f, 0.5f, 0.5f};
@@ -52,6 +55,10 @@ struct DiffuseBsdf {
     // Owned by the Scene; looked up per hit by resolve_bsdf(). Null in a SceneDesc (the
     // description names the file in MaterialDesc::reflectance_texture instead).
     const BitmapTexture* reflectance_tex = nullptr;
+    // Beckmann-style RMS slope of the micro-geometry (Mitsuba's alpha; sigma = alpha / sqrt 2).
+    float alpha = 0;
+    // Mitsuba's useFastApprox: the qualitative model's A + B form without interreflection.
+    bool fast_approx = false;
 };
 
 // Conductor: alpha == 0 is a smooth mirror. Without eta/k (has_ior false) Fresnel is 1.

@@ -66,6 +66,15 @@ std::vector<Chi2Case> all_cases() {
             if (ch == '.' || ch == '-') ch = (ch == '.') ? 'p' : 'm';
         cases.push_back({n, DiffuseBsdf{}, dir(c, phi_o)});
     }
+    // Oren-Nayar (roughdiffuse): cosine-sampled like Lambert, with a weight that is not constant.
+    for (float c : {0.6f, 0.01f, -0.3f}) {
+        std::ostringstream os;
+        os << "RoughDiffuse_cos" << c;
+        std::string n = os.str();
+        for (char& ch : n)
+            if (ch == '.' || ch == '-') ch = (ch == '.') ? 'p' : 'm';
+        cases.push_back({n, DiffuseBsdf{{0.7f, 0.5f, 0.3f}, true, nullptr, 0.6f, c < 0}, dir(c, phi_o)});
+    }
     struct Rough {
         MicrofacetType t;
         float au, av;

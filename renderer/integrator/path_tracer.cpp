@@ -55,8 +55,11 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
         if (!scene_.intersect(ray, hit)) {
             int env = scene_.environment_light();
             if (env >= 0) {
-                Rgb le = std::get<ConstantLight>(scene_.lights()[size_t(env)]).radiance;
-                float w = prev_delta || !nee ? 1.f : power_heuristic(prev_pdf_sa, sel.pmf(size_t(env)) * environment_pdf_li_sa());
+                const Light& el = scene_.lights()[size_t(env)];
+                const Vec3 d = normalize(ray.d);
+                Rgb le = environment_le(el, d);
+                float w = prev_delta || !nee ? 1.f
+                                             : power_heuristic(prev_pdf_sa, sel.pmf(size_t(env)) * environment_pdf_li_sa(el, d));
                 L += beta * le * w;
             }
             break;

@@ -165,6 +165,16 @@ std::optional<LightSample> light_sample_li(const Scene& scene, const Light& ligh
         ls.infinite = true;
         return ls;
     }
+    if (auto* em = std::get_if<EnvMapLight>(&light)) {
+        auto es = em->map->sample(u);
+        if (!es) return std::nullopt;
+        LightSample ls;
+        ls.wi = es->d;
+        ls.Li = es->L;
+        ls.pdf_sa = es->pdf_sa;
+        ls.infinite = true;
+        return ls;
+    }
     const auto& c = std::get<ConstantLight>(light);
     LightSample ls;
     ls.wi = square_to_uniform_sphere(u);
@@ -172,6 +182,22 @@ std::optional<LightSample> light_sample_li(const Scene& scene, const Light& ligh
     ls.pdf_sa = environment_pdf_li_sa();
     ls.infinite = true;
     return ls;
+}
+
+Rgb environment_le(const Light& light, const Vec3& d) {
+    if (auto* c = std::get_if<ConstantLight>(&light)) return c->radiance;
+    if (auto* e = std::get_if<EnvMapLight>(&light)) return e->map->eval(d);
+    return Rgb(0.f);
+}
+
+float environment_pdf_li_sa(const Light& light, const Vec3& d) {
+    if (std::holds_alternative<ConstantLight>(light)) return environment_pdf_li_sa();
+    if (auto* e = std::get_if<EnvMapLight>(&light)) return e->map->pdf_sa(d);
+    return 0.f;
+}
+
+bool is_environment(const Light& light) {
+    return std::holds_alternative<ConstantLight>(light) || std::holds_alternative<EnvMapLight>(light);
 }
 
 float light_pdf_li_sa(const Scene& scene, const AreaLight& light, const Vec3& ref, const SurfaceHit& hit) {
@@ -198,6 +224,7 @@ double light_power(const Scene& scene, const Light& light) {
         return 2.0 * kPiD * average(s->intensity) * (1.0 - 0.5 * (std::cos(s->beam_rad) + s->cos_cutoff));
     double r = scene.bounds().empty() ? 1.0 : std::max(1e-6f, scene.bounds().radius());
     if (auto* d = std::get_if<DirectionalLight>(&light)) return kPiD * r * r * average(d->irradiance);
+    if (auto* e = std::get_if<EnvMapLight>(&light)) return kPiD * r * r * e->map->integral();
     const auto& c = std::get<ConstantLight>(light);
     return 4.0 * kPiD * kPiD * r * r * average(c.radiance);
 }

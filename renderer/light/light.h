@@ -2,9 +2,11 @@
 // The closed set of emitters, dispatched through std::variant.
 // Densities: pdf_sa is per unit solid angle at the receiving point; delta lights (point, spot,
 // directional) have none and report delta = true with a discrete probability of 1.
+#include <memory>
 #include <optional>
 #include <variant>
 
+#include "light/envmap.h"
 #include "math/frame.h"
 #include "math/vec.h"
 
@@ -36,8 +38,12 @@ struct DirectionalLight {
 struct ConstantLight {
     Rgb radiance;
 };
+// An image-based environment (light/envmap.h); shared, so copying a Light stays cheap.
+struct EnvMapLight {
+    std::shared_ptr<const EnvMap> map;
+};
 
-using Light = std::variant<AreaLight, PointLight, SpotLight, DirectionalLight, ConstantLight>;
+using Light = std::variant<AreaLight, PointLight, SpotLight, DirectionalLight, ConstantLight, EnvMapLight>;
 
 // A light sample seen from a reference point, for next-event estimation.
 struct LightSample {
@@ -56,6 +62,12 @@ std::optional<LightSample> light_sample_li(const Scene& scene, const Light& ligh
 float light_pdf_li_sa(const Scene& scene, const AreaLight& light, const Vec3& ref_p, const SurfaceHit& hit);
 // Constant environment: density of direction wi.
 inline float environment_pdf_li_sa() { return 0.07957747154594766788f; }  // 1 / 4pi, uniform sphere
+// An environment (constant or envmap) seen along unit direction d (pointing away from the scene):
+// the radiance arriving from d, and the solid-angle density with which light_sample_li picks d.
+// Both are zero for any other light.
+Rgb environment_le(const Light& light, const Vec3& d);
+float environment_pdf_li_sa(const Light& light, const Vec3& d);
+bool is_environment(const Light& light);
 // Radiance leaving an area light at `hit` towards w.
 Rgb area_light_le(const AreaLight& light, const SurfaceHit& hit, const Vec3& w);
 // What a finite light's endpoint at `at` sends along unit direction w: radiance x |cos| for area

@@ -99,6 +99,12 @@ std::optional<LightEmission> light_sample_le(const Scene& scene, const Light& li
         e.delta_dir = true;
         e.Le = d->irradiance;
         e.pdf_dir = 1;
+    } else if (auto* em = std::get_if<EnvMapLight>(&light)) {
+        auto es = em->map->sample(u_dir);
+        if (!es) return std::nullopt;
+        dir = -es->d;  // arriving from the sampled direction
+        e.Le = es->L;
+        e.pdf_dir = es->pdf_sa;
     } else {
         const auto& cl = std::get<ConstantLight>(light);
         dir = -square_to_uniform_sphere(u_dir);  // arriving from the sampled direction
@@ -137,11 +143,13 @@ void light_pdf_le(const Scene& scene, const Light& light, const Vec3& n, const V
     const SceneBounds& b = scene.bounds();
     float r = b.empty() ? 1.f : std::max(b.radius(), 1e-6f);
     pdf_pos = 1.0 / (kPiD * double(r) * r);
-    pdf_dir = std::holds_alternative<DirectionalLight>(light) ? 1.0 : uniform_sphere_pdf_sa();
+    pdf_dir = std::holds_alternative<DirectionalLight>(light) ? 1.0 : infinite_light_pdf_dir(light, w);
 }
 
-double infinite_light_pdf_dir(const Light& light, const Vec3&) {
+double infinite_light_pdf_dir(const Light& light, const Vec3& w) {
     if (std::holds_alternative<ConstantLight>(light)) return uniform_sphere_pdf_sa();
+    // w is the direction of travel: the light arrives from -w, which NEE samples with this density.
+    if (auto* e = std::get_if<EnvMapLight>(&light)) return e->map->pdf_sa(-w);
     return 0;  // a delta direction is never hit by chance
 }
 

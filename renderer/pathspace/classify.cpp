@@ -80,7 +80,7 @@ std::string light_words(const Light& l) {
     if (std::holds_alternative<PointLight>(l)) return "a point light";
     if (std::holds_alternative<SpotLight>(l)) return "a spot light";
     if (std::holds_alternative<DirectionalLight>(l)) return "a directional light";
-    if (std::holds_alternative<ConstantLight>(l)) return "the environment";
+    if (is_environment(l)) return "the environment";
     return "an area light";
 }
 

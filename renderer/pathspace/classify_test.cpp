@@ -21,6 +21,9 @@ TEST(Classifier, Table81Emitters) {
     EXPECT_EQ(classify_light(DirectionalLight{}).position, 'D');  // LDS: sunlight through a window
     EXPECT_EQ(classify_light(DirectionalLight{}).direction, 'S');
     EXPECT_EQ(classify_light(ConstantLight{}).direction, 'D');
+    // An envmap is an area at infinity, like the constant environment: LDD.
+    EXPECT_EQ(classify_light(EnvMapLight{}).position, 'D');
+    EXPECT_EQ(classify_light(EnvMapLight{}).direction, 'D');
 }
 
 TEST(Classifier, Table81Sensors) {

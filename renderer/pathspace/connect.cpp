@@ -165,8 +165,8 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         if (z.light < 0) return std::nullopt;
         const Light& l = scene.lights()[size_t(z.light)];
         if (z.infinite) {
-            if (!std::holds_alternative<ConstantLight>(l)) return std::nullopt;
-            c.L = z.beta * std::get<ConstantLight>(l).radiance;
+            if (!is_environment(l)) return std::nullopt;
+            c.L = z.beta * environment_le(l, -z.dir);  // z.dir is the direction light travels
         } else {
             c.L = z.beta * area_light_le(std::get<AreaLight>(l), z.hit, z.wo);
         }

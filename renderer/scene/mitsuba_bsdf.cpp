@@ -296,6 +296,25 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         y["type"] = "diffuse";
         put_colour("reflectance", "reflectance", true);
         y["two_sided"] = two_sided;
+    } else if (type == "roughdiffuse") {
+        // Mitsuba 0.6 (Oren-Nayar; bsdf/diffuse.cpp): reflectance or diffuse_reflectance, alpha
+        // (default 0.2), use_fast_approx (default false).
+        y["type"] = "roughdiffuse";
+        put_colour("reflectance", "reflectance", true);
+        if (!lines.count("reflectance")) put_colour("reflectance", "diffuse_reflectance", true);
+        if (auto c = find_param(e, "alpha")) {
+            if (std::string(c.name()) == "texture" || std::string(c.name()) == "ref") {
+                warn(c, key, "alpha textures are not supported; using alpha 0.2");
+                y["alpha"] = "0.2";
+            } else {
+                y["alpha"] = scalar(c, key);
+            }
+            lines["alpha"] = line_of(c);
+        } else {
+            y["alpha"] = "0.2";  // Mitsuba's default
+        }
+        put("fast_approx", "use_fast_approx");
+        y["two_sided"] = two_sided;
     } else if (type == "conductor") {
         put_conductor();
     } else if (type == "roughconductor") {

@@ -10,6 +10,7 @@
 #include "scene/scene_parser.h"
 #include "scene/scene_writer.h"
 #include "scene/test_helpers.h"
+#include "test_images.h"
 
 using namespace omega;
 using omega::test::scene_error_of;
@@ -88,6 +89,8 @@ void expect_same(const SceneDesc& a, const SceneDesc& b) {
             auto* e = std::get_if<DiffuseBsdf>(&y);
             EXPECT_EQ(d->reflectance, e->reflectance) << name;
             EXPECT_EQ(d->two_sided, e->two_sided) << name;
+            EXPECT_EQ(d->alpha, e->alpha) << name;
+            EXPECT_EQ(d->fast_approx, e->fast_approx) << name;
         } else if (auto* c = std::get_if<ConductorBsdf>(&x)) {
             auto* e = std::get_if<ConductorBsdf>(&y);
             EXPECT_EQ(c->eta, e->eta) << name;
@@ -139,6 +142,8 @@ void expect_same(const SceneDesc& a, const SceneDesc& b) {
         for (int k = 0; k < 3; ++k) EXPECT_NEAR(p.direction[k], q.direction[k], 1e-15);  // renormalised
         EXPECT_EQ(p.irradiance, q.irradiance);
         EXPECT_EQ(p.radiance, q.radiance);
+        EXPECT_EQ(p.file, q.file);
+        EXPECT_EQ(p.scale, q.scale);
     }
 }
 
@@ -615,6 +620,48 @@ TEST(MitsubaImporter, MeshesResolveAgainstTheSceneFolder) {
     std::string yaml = write_scene_yaml(d, dir.path.string());
     EXPECT_NE(yaml.find("file: \"meshes/tri.obj\""), std::string::npos) << yaml;
     expect_round_trip(d, dir.path.string());
+}
+
+// Mitsuba 0.6's roughdiffuse (camelCase names) is Oren-Nayar in DiffuseBsdf; an envmap is an
+// image light (no longer a constant), its file resolved against the XML's folder, read by
+// Scene::build, and written back to YAML relative to the YAML's folder.
+TEST(MitsubaImporter, RoughDiffuseAndEnvmap) {
+    TempDir dir;
+    test::write_image_f32((dir.path / "sky.exr").string(), 4, 3, 3, std::vector<float>(36, 0.5f));
+    auto xml = dir.write("scene.xml", R"(<scene version="0.6.0">
+<sensor type="perspective"><float name="fov" value="40"/></sensor>
+<bsdf type="roughdiffuse" id="rd"><rgb name="diffuseReflectance" value="0.3, 0.4, 0.5"/><float name="alpha" value="0.4"/>
+  <boolean name="useFastApprox" value="true"/></bsdf>
+<bsdf type="roughdiffuse" id="rd2"/>
+<shape type="sphere"><ref id="rd"/></shape>
+<shape type="sphere"><ref id="rd2"/></shape>
+<emitter type="envmap"><string name="filename" value="sky.exr"/><float name="scale" value="2.5"/>
+  <transform name="toWorld"><rotate y="1" angle="30"/></transform></emitter>
+</scene>)");
+    SceneDesc d = import_mitsuba_file(xml.string());
+    EXPECT_TRUE(d.warnings.empty()) << all_warnings(d);
+    const auto& rd = std::get<DiffuseBsdf>(d.materials.at("rd").bsdf);
+    expect_rgb(rd.reflectance, 0.3f, 0.4f, 0.5f);
+    EXPECT_EQ(rd.alpha, 0.4f);
+    EXPECT_TRUE(rd.fast_approx);
+    EXPECT_FALSE(rd.two_sided);
+    const auto& rd2 = std::get<DiffuseBsdf>(d.materials.at("rd2").bsdf);
+    EXPECT_EQ(rd2.alpha, 0.2f);  // Mitsuba's default
+    EXPECT_FALSE(rd2.fast_approx);
+    ASSERT_EQ(d.lights.size(), 1u);
+    const LightDesc& l = d.lights[0];
+    EXPECT_EQ(l.type, LightType::EnvMap);
+    EXPECT_EQ(l.file, (dir.path / "sky.exr").lexically_normal().string());
+    EXPECT_EQ(l.scale, 2.5f);
+    EXPECT_NEAR(l.to_world(0, 2), std::sin(30 * 3.14159265358979 / 180), 1e-12);
+    std::string yaml = write_scene_yaml(d, dir.path.string());
+    EXPECT_NE(yaml.find("type: envmap, file: \"sky.exr\""), std::string::npos) << yaml;
+    EXPECT_NE(yaml.find("type: roughdiffuse"), std::string::npos) << yaml;
+    expect_round_trip(d, dir.path.string());
+    auto scene = Scene::build(d);
+    ASSERT_GE(scene->environment_light(), 0);
+    const auto& env = std::get<EnvMapLight>(scene->lights()[size_t(scene->environment_light())]);
+    EXPECT_NEAR(env.map->eval(Vec3{0, 1, 0}).x, 1.25f, 1e-6f);  // 0.5 x scale 2.5
 }
 
 TEST(MitsubaImporter, BitmapMapsToATexture) {

@@ -12,6 +12,7 @@
 #include "io/file_gate.h"
 #include "scene/scene_error.h"
 #include "scene/scene_files.h"
+#include "texture/image.h"
 
 namespace omega {
 
@@ -40,8 +41,27 @@ Light make_light(const LightDesc& d) {
         }
         case LightType::Directional: return DirectionalLight{Vec3(normalize(d.direction)), d.irradiance};
         case LightType::Constant: return ConstantLight{d.radiance};
+        case LightType::EnvMap: break;  // built by load_envmap: it reads a file
     }
     throw std::logic_error("unknown light type");
+}
+
+// Reads the envmap's image through the scene's gate (decode_image: OIIO never sees a path).
+EnvMapLight load_envmap(const FileGate& gate, const LightDesc& d) {
+    const SourceLoc& loc = d.file_loc.file.empty() ? d.loc : d.file_loc;
+    const std::string where_ = loc.key.empty() ? fmt::format("{}: ", where(loc)) : fmt::format("{}: {}: ", where(loc), loc.key);
+    ImagePixels px = decode_image(gate, d.file, d.written, where_, "envmap");
+    const size_t nc = size_t(px.channels);
+    std::vector<Rgb> rgb(size_t(px.width) * size_t(px.height));
+    for (size_t i = 0; i < rgb.size(); ++i) {
+        const float* p = &px.data[i * nc];
+        rgb[i] = nc >= 3 ? Rgb{p[0], p[1], p[2]} : Rgb(p[0]);
+    }
+    try {
+        return EnvMapLight{std::make_shared<const EnvMap>(px.width, px.height, std::move(rgb), d.scale, d.to_world)};
+    } catch (const std::invalid_argument& e) {
+        throw SceneError(fmt::format("{}envmap '{}': {}", where_, d.written.empty() ? d.file : d.written, e.what()));
+    }
 }
 
 }  // namespace
@@ -229,12 +249,14 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
         s->shapes_.push_back(std::move(sh));
     }
     for (const LightDesc& ld : desc.lights) {
-        Light l = make_light(ld);
+        if (ld.type == LightType::EnvMap) poll();
+        Light l = ld.type == LightType::EnvMap ? Light(load_envmap(gate, ld)) : make_light(ld);
         // A light that emits nothing cannot contribute: leave it out.
-        if (std::holds_alternative<ConstantLight>(l)) {
-            if (is_black(std::get<ConstantLight>(l).radiance)) continue;
+        if (is_environment(l)) {
+            if (auto* c = std::get_if<ConstantLight>(&l); c && is_black(c->radiance)) continue;
+            if (auto* e = std::get_if<EnvMapLight>(&l); e && e->map->black()) continue;
             if (s->env_light_ >= 0)
-                throw SceneError(fmt::format("{}: lights: only one constant environment is allowed", where(ld.loc)));
+                throw SceneError(fmt::format("{}: lights: only one environment (constant or envmap) is allowed", where(ld.loc)));
             s->env_light_ = int(s->lights_.size());
         }
         s->lights_.push_back(l);

@@ -153,7 +153,7 @@ struct ShapeDesc {
     SourceLoc file_loc;   // mesh: of the file value itself
 };
 
-enum class LightType { Point, Spot, Directional, Constant };
+enum class LightType { Point, Spot, Directional, Constant, EnvMap };
 
 struct LightDesc {
     LightType type = LightType::Point;
@@ -165,6 +165,12 @@ struct LightDesc {
     Vec3d direction{0, 0, -1};      // directional: direction of travel
     Rgb irradiance{1.f, 1.f, 1.f};  // directional: W/m^2 on a plane facing it
     Rgb radiance{1.f, 1.f, 1.f};    // constant environment: W/(m^2 sr)
+    // envmap: an equirectangular image (light/envmap.h) in radiance units, times `scale`;
+    // to_world (above) orients it.
+    std::string file;      // absolute path
+    std::string written;   // as the scene wrote it, for messages
+    SourceLoc file_loc;    // of the file value itself
+    float scale = 1.f;
     SourceLoc loc;
 };
 

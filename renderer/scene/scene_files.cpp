@@ -13,6 +13,8 @@ void for_each_scene_file(const SceneDesc& desc, const std::function<void(const S
         for (const auto* t : {&m.reflectance_texture, &m.specular_texture, &m.opacity_texture, &m.bump_texture})
             if (*t && !(*t)->checker)  // a checkerboard reads no file
                 fn({(*t)->file, (*t)->written, (*t)->file_loc.file.empty() ? (*t)->loc : (*t)->file_loc, "texture"});
+    for (const LightDesc& l : desc.lights)
+        if (l.type == LightType::EnvMap) fn({l.file, l.written, l.file_loc.file.empty() ? l.loc : l.file_loc, "envmap"});
 }
 
 const FileGate& scene_gate(const SceneDesc& desc) { return desc.files ? *desc.files : *FileGate::unconfined(); }

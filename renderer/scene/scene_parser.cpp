@@ -145,7 +145,7 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Materials
 
-enum class MatType { Diffuse, Conductor, Dielectric, ThinDielectric, Plastic, RoughPlastic, Black };
+enum class MatType { Diffuse, RoughDiffuse, Conductor, Dielectric, ThinDielectric, Plastic, RoughPlastic, Black };
 
 void parse_alpha(ParamBag& b, float& au, float& av) {
     bool iso = b.has("alpha"), aniso = b.has("alpha_u") || b.has("alpha_v");
@@ -307,6 +307,7 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
     m.name = name;
     m.loc = v.loc();
     MatType type = ParamBag::enum_value<MatType>(b.require("type"), {{"diffuse", MatType::Diffuse},
+                                                                     {"roughdiffuse", MatType::RoughDiffuse},
                                                                      {"conductor", MatType::Conductor},
                                                                      {"dielectric", MatType::Dielectric},
                                                                      {"thindielectric", MatType::ThinDielectric},
@@ -314,13 +315,18 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
                                                                      {"roughplastic", MatType::RoughPlastic},
                                                                      {"black", MatType::Black}});
     switch (type) {
-        case MatType::Diffuse: {
+        case MatType::Diffuse:
+        case MatType::RoughDiffuse: {
             DiffuseBsdf d;
             if (b.has("reflectance") && b.get("reflectance")->is_map())
                 m.reflectance_texture = parse_bitmap(*b.get("reflectance"));
             else
                 d.reflectance = rgb_in(b, "reflectance", d.reflectance, 0, 1);
             d.two_sided = b.get_bool("two_sided", true);
+            if (type == MatType::RoughDiffuse) {  // Oren-Nayar, Mitsuba's roughdiffuse
+                d.alpha = float_in(b, "alpha", 0.2f, 0, false, kInf, true);
+                d.fast_approx = b.get_bool("fast_approx", false);
+            }
             m.bsdf = d;
             break;
         }
@@ -592,7 +598,8 @@ LightDesc parse_light(const ParamValue& item) {
     l.type = ParamBag::enum_value<LightType>(b.require("type"), {{"point", LightType::Point},
                                                                  {"spot", LightType::Spot},
                                                                  {"directional", LightType::Directional},
-                                                                 {"constant", LightType::Constant}});
+                                                                 {"constant", LightType::Constant},
+                                                                 {"envmap", LightType::EnvMap}});
     switch (l.type) {
         case LightType::Point:
             l.position = b.get_vec3("position", l.position);
@@ -618,6 +625,15 @@ LightDesc parse_light(const ParamValue& item) {
             break;
         }
         case LightType::Constant: l.radiance = required_rgb_nonneg(b, "radiance"); break;
+        case LightType::EnvMap: {
+            NamedFile f = scene_file(b.require("file"));
+            l.file = f.file;
+            l.written = f.written;
+            l.file_loc = f.loc;
+            l.scale = float_in(b, "scale", 1.f, 0, false, kInf, true);
+            if (auto v = b.get("to_world")) l.to_world = parse_to_world(*v);
+            break;
+        }
     }
     b.check_unused();
     return l;

@@ -319,8 +319,8 @@ TEST(SceneParser, Errors) {
     EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  w: {type: diffuse, reflectance: [0.5, 1.2, 0]}\n"),
               "scene.yaml:3: materials.w.reflectance: components must be in [0, 1], got [0.5, 1.2, 0]");
     EXPECT_EQ(parse_error("omega: 1\nmaterials:\n  w: {type: velvet}\n"),
-              "scene.yaml:3: materials.w.type: expected one of diffuse, conductor, dielectric, thindielectric, plastic, roughplastic, "
-              "black, got 'velvet'");
+              "scene.yaml:3: materials.w.type: expected one of diffuse, roughdiffuse, conductor, dielectric, thindielectric, "
+              "plastic, roughplastic, black, got 'velvet'");
     // Plastic is isotropic (as in Mitsuba and Tungsten), and a smooth plastic has no roughness.
     EXPECT_NE(parse_error("omega: 1\nmaterials:\n  p: {type: roughplastic, alpha_u: 0.1, alpha_v: 0.2}\n").find("alpha_u"),
               std::string::npos);

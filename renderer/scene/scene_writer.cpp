@@ -82,10 +82,13 @@ std::string bitmap(const BitmapDesc& t, const std::string& base_dir) {
 
 std::string material_bsdf(const MaterialDesc& m, const std::string& base_dir) {
     const Bsdf& b = m.bsdf;
-    if (auto* d = std::get_if<DiffuseBsdf>(&b))
-        return fmt::format("{{type: diffuse, reflectance: {}, two_sided: {}}}",
-                           m.reflectance_texture ? bitmap(*m.reflectance_texture, base_dir) : rgb(d->reflectance),
-                           d->two_sided);
+    if (auto* d = std::get_if<DiffuseBsdf>(&b)) {
+        const std::string refl = m.reflectance_texture ? bitmap(*m.reflectance_texture, base_dir) : rgb(d->reflectance);
+        if (d->alpha > 0)
+            return fmt::format("{{type: roughdiffuse, reflectance: {}, alpha: {}, fast_approx: {}, two_sided: {}}}", refl,
+                               num(d->alpha), d->fast_approx, d->two_sided);
+        return fmt::format("{{type: diffuse, reflectance: {}, two_sided: {}}}", refl, d->two_sided);
+    }
     if (auto* c = std::get_if<ConductorBsdf>(&b)) {
         std::string s = "{type: conductor";
         if (c->has_ior) s += fmt::format(", eta: {}, k: {}", rgb(c->eta), rgb(c->k));
@@ -238,6 +241,11 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
                                  rgb(l.irradiance));
                 break;
             case LightType::Constant: o += fmt::format("  - {{type: constant, radiance: {}}}\n", rgb(l.radiance)); break;
+            case LightType::EnvMap:
+                o += fmt::format("  - {{type: envmap, file: {}, scale: {}", q(rel_path(l.file, base_dir)), num(l.scale));
+                if (!is_identity(l.to_world)) o += fmt::format(", to_world: {}", matrix(l.to_world));
+                o += "}\n";
+                break;
         }
     }
     return o;

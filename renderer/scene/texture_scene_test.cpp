@@ -300,4 +300,38 @@ shapes:
     EXPECT_NE(f.error("materials: {m: {type: diffuse, bump_scale: 2}}\nshapes: []\n").find("bump"), std::string::npos);
 }
 
+// The YAML envmap light: parsed with its file resolved against the scene's folder, scale and
+// to_world; errors name the line and key; the image is read at build (a bad one is a SceneError
+// there), and a scene holds one environment at most.
+TEST(TextureScene, EnvmapLight) {
+    TempDir dir;
+    test::write_image_f32((dir.path / "sky/sky.exr").string(), 4, 2, 3, std::vector<float>(24, 0.25f));
+    dir.write("sky/junk.exr", "not an image");
+    auto parse = [&](const std::string& lights) {
+        return parse_scene_string("omega: 1\nshapes:\n  - {type: sphere}\nlights:\n" + lights,
+                                  (dir.path / "scene.yaml").string());
+    };
+    SceneDesc d = parse("  - {type: envmap, file: sky/sky.exr, scale: 2, to_world: {rotate: {axis: [0, 1, 0], angle: 90}}}\n");
+    ASSERT_EQ(d.lights.size(), 1u);
+    EXPECT_EQ(d.lights[0].type, LightType::EnvMap);
+    EXPECT_EQ(d.lights[0].file, (dir.path / "sky/sky.exr").lexically_normal().string());
+    EXPECT_EQ(d.lights[0].scale, 2.f);
+    auto scene = Scene::build(d);
+    ASSERT_EQ(scene->environment_light(), 0);
+    EXPECT_NEAR(environment_le(scene->lights()[0], Vec3{0, 0, 1}).y, 0.5f, 1e-6f);
+    std::string e = scene_error_of([&] { parse("  - {type: envmap, file: sky/none.exr}\n"); });
+    EXPECT_NE(e.find("scene.yaml:5: lights[0].file: cannot open 'sky/none.exr'"), std::string::npos) << e;
+    e = scene_error_of([&] { parse("  - {type: envmap, file: sky/sky.exr, scale: -1}\n"); });
+    EXPECT_NE(e.find("lights[0].scale: must be >= 0"), std::string::npos) << e;
+    e = scene_error_of([&] { parse("  - {type: envmap}\n"); });
+    EXPECT_NE(e.find("lights[0].file: missing key"), std::string::npos) << e;
+    e = scene_error_of([&] { Scene::build(parse("  - {type: envmap, file: sky/junk.exr}\n")); });
+    EXPECT_NE(e.find("cannot read envmap 'sky/junk.exr'"), std::string::npos) << e;
+    e = scene_error_of(
+        [&] { Scene::build(parse("  - {type: constant, radiance: 1}\n  - {type: envmap, file: sky/sky.exr}\n")); });
+    EXPECT_NE(e.find("only one environment"), std::string::npos) << e;
+    // A black map (scale 0) emits nothing and is left out, as a black constant is.
+    EXPECT_EQ(Scene::build(parse("  - {type: envmap, file: sky/sky.exr, scale: 0}\n"))->environment_light(), -1);
+}
+
 }  // namespace

@@ -5,6 +5,8 @@
 
 #include "render_harness.h"
 #include "scene/scene_parser.h"
+#include "scene/test_helpers.h"
+#include "test_images.h"
 
 namespace omega {
 namespace {
@@ -203,6 +205,59 @@ TEST(IntegratorAgreement, GlassCausticSeenDirectly) {
     lamp.emitter = EmitterDesc{Rgb(40.f), false};
     d.shapes.push_back(lamp);
     expect_agreement(d, 2048, 512, 512, 4, "caustic");
+}
+
+// An envmap (sky gradient, ground, a small bright sun) lighting a rough diffuse (Oren-Nayar) floor,
+// a rough metal cube and a Lambertian sphere, seen from above so that no pixel sees the environment directly
+// (light tracing cannot). Path tracing: NEE by the map's distribution and MIS on escaped rays;
+// light tracing: emission from the bounding disk; bdpt: every strategy, with the map's
+// densities at the vertex at infinity.
+TEST(IntegratorAgreement, EnvMapFromAbove) {
+    test::TempDir dir;
+    const int w = 32, h = 16;
+    std::vector<float> px;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float t = float(y) / float(h - 1);
+            Rgb c = t < 0.5f ? Rgb{0.4f + t, 0.6f + t, 1.2f} : Rgb{0.25f, 0.2f, 0.15f};
+            if (x == 20 && y == 4) c = Rgb{60.f, 50.f, 40.f};
+            px.insert(px.end(), {c.x, c.y, c.z});
+        }
+    const std::string file = (dir.path / "sky.exr").string();
+    test::write_image_f32(file, w, h, 3, px);
+    SceneDesc d = test::empty_scene(24, 24);
+    d.integrator.max_depth = 4;
+    d.sensor.to_world = Mat4::look_at({0, 2.6, 0.6}, {0, 0, 0}, {0, 0, 1});
+    d.materials["white"] = test::diffuse("white", Rgb(0.7f));
+    d.materials["rough"] = MaterialDesc{"rough", DiffuseBsdf{{0.8f, 0.7f, 0.6f}, true, nullptr, 0.6f, false}, {}};
+    ConductorBsdf metal;
+    metal.alpha_u = metal.alpha_v = 0.25f;
+    metal.distribution = MicrofacetType::GGX;
+    metal.specular_reflectance = Rgb{0.9f, 0.7f, 0.5f};
+    d.materials["metal"] = MaterialDesc{"metal", metal, {}};
+    ShapeDesc floor;
+    floor.type = ShapeType::Rectangle;
+    floor.to_world = Mat4::rotate({1, 0, 0}, -90) * Mat4::scale({3, 3, 1});
+    floor.material = "rough";
+    d.shapes.push_back(floor);
+    ShapeDesc box;
+    box.type = ShapeType::Cube;
+    box.to_world = Mat4::translate({0.3, 0.3, 0}) * Mat4::rotate({0, 1, 0}, 25) * Mat4::scale({0.3, 0.3, 0.3});
+    box.material = "metal";
+    d.shapes.push_back(box);
+    ShapeDesc ball;
+    ball.type = ShapeType::Sphere;
+    ball.center = {-0.45, 0.25, 0.2};
+    ball.radius = 0.25;
+    ball.material = "white";
+    d.shapes.push_back(ball);
+    LightDesc env;
+    env.type = LightType::EnvMap;
+    env.file = file;
+    env.scale = 1.5f;
+    env.to_world = Mat4::rotate({0, 1, 0}, 60);
+    d.lights.push_back(env);
+    expect_agreement(d, 256, 256, 128, 4, "envmap");
 }
 
 }  // namespace

@@ -4,7 +4,7 @@
 The standard library has no YAML parser, so the scene is scanned as text for `file:` keys (block
 or flow style, plain or quoted values; comments and block scalars skipped). Every `file:` value
 that names an existing regular file is sent, which covers what the C++ client sends (mesh shapes,
-bitmap reflectance textures). A clean relative name (`meshes/bunny.obj`) is kept; any other
+bitmap textures of any material parameter, an envmap light's image). A clean relative name (`meshes/bunny.obj`) is kept; any other
 (absolute, or climbing out with `..`) becomes `assets/<first 16 hex of sha256>/<basename>` and
 only that value is rewritten in the text, so the rest of the scene travels byte for byte. The
 files a mesh names inside itself (an OBJ's `mtllib`, a glTF's relative `buffers[].uri` and

@@ -1,0 +1,135 @@
+"""Scenes with image files go through the daemon: `omega submit` uploads every bitmap texture and
+the envmap image the scene names (a YAML scene and a Mitsuba XML scene), and the fetched image
+equals, bit for bit, `omega render` of the same scene with the same seed and spp."""
+import os
+import struct
+import subprocess
+
+from harness import OMEGA, Daemon, Test, exr_equal, wait_state
+
+SPP, SEED = 8, 5
+
+
+def write(path, data):
+    with open(path, "wb") as f:
+        f.write(data)
+
+
+def pfm(width, height, fn):
+    """A colour PFM (little-endian floats, rows stored bottom first), fn(x, y) -> (r, g, b) with
+    y = 0 the top row."""
+    rows = []
+    for y in reversed(range(height)):
+        rows.append(b"".join(struct.pack("<3f", *fn(x, y)) for x in range(width)))
+    return f"PF\n{width} {height}\n-1.0\n".encode() + b"".join(rows)
+
+
+def sky(x, y):
+    if x == 5 and y == 2:
+        return (40.0, 35.0, 30.0)  # a small sun
+    return (0.4 + 0.05 * y, 0.5 + 0.04 * y, 0.9) if y < 4 else (0.2, 0.15, 0.1)
+
+
+def checks(x, y):
+    return (0.8, 0.2, 0.1) if (x + y) % 2 else (0.1, 0.6, 0.8)
+
+
+# A textured floor, a bump-mapped and a masked rectangle (each with its own image, one of them in
+# a subfolder), lit by an envmap; seen from above at a slant.
+YAML_SCENE = b"""omega: 1
+integrator: {type: path, max_depth: 4}
+sensor:
+  type: perspective
+  fov: 50
+  to_world: {look_at: {origin: [0, 2.5, 2.5], target: [0, 0, 0], up: [0, 1, 0]}}
+  film: {width: 40, height: 32}
+materials:
+  floor: {type: diffuse, reflectance: {type: bitmap, file: tex/checks.pfm, filter: nearest}}
+  bumpy: {type: diffuse, reflectance: 0.6, bump: {type: bitmap, file: height.pfm}, bump_scale: 0.05}
+  leaf: {type: diffuse, reflectance: 0.5, opacity: {type: bitmap, file: alpha.pfm}}
+shapes:
+  - {type: rectangle, material: floor, to_world: [{scale: 2}, {rotate: {axis: [1, 0, 0], angle: -90}}]}
+  - {type: rectangle, material: bumpy,
+     to_world: [{scale: 0.5}, {rotate: {axis: [1, 0, 0], angle: -90}}, {translate: [-0.7, 0.3, 0]}]}
+  - {type: rectangle, material: leaf, to_world: [{scale: 0.5}, {translate: [0.7, 0.5, 0]}]}
+lights:
+  - {type: envmap, file: sky.pfm, scale: 1.5, to_world: {rotate: {axis: [0, 1, 0], angle: 40}}}
+"""
+
+XML_SCENE = b"""<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="4"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="50"/>
+        <transform name="to_world"><lookat origin="0, 2.5, 2.5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="32"/></film>
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="diffuse">
+            <texture type="bitmap" name="reflectance"><string name="filename" value="tex/checks.pfm"/></texture>
+        </bsdf>
+    </shape>
+    <emitter type="envmap">
+        <string name="filename" value="sky.pfm"/>
+        <float name="scale" value="1.5"/>
+    </emitter>
+</scene>
+"""
+
+
+def make_files(scene_dir):
+    os.makedirs(os.path.join(scene_dir, "tex"))
+    write(os.path.join(scene_dir, "tex", "checks.pfm"), pfm(8, 8, checks))
+    write(os.path.join(scene_dir, "sky.pfm"), pfm(16, 8, sky))
+    write(os.path.join(scene_dir, "height.pfm"), pfm(8, 8, lambda x, y: ((x * y) % 3 / 3.0,) * 3))
+    write(os.path.join(scene_dir, "alpha.pfm"), pfm(8, 8, lambda x, y: (1.0 if (x - 4) ** 2 + (y - 4) ** 2 < 9 else 0.0,) * 3))
+
+
+def submit_and_compare(tmp, d, scene_path, expect_assets, label):
+    local = os.path.join(tmp, label + "-local.exr")
+    subprocess.run([OMEGA, "render", scene_path, "--spp", str(SPP), "--seed", str(SEED), "-o", local, "--threads", "2",
+                    "-q"], check=True, timeout=120, stdout=subprocess.DEVNULL)
+    # From another folder: the client resolves the scene's files against the scene's own folder.
+    r = subprocess.run([OMEGA, "submit", scene_path, "--host", d.unix, "--spp", str(SPP), "--seed", str(SEED)],
+                       capture_output=True, text=True, timeout=120, cwd=tmp)
+    assert r.returncode == 0, r.stderr
+    assert f"{expect_assets} asset(s), {expect_assets} sent" in r.stderr, r.stderr
+    assert "warning" not in r.stderr, r.stderr
+    job = int(r.stdout.strip())
+    c = d.client()
+    info = wait_state(c, job, {"done", "failed"})
+    assert info["state"] == "done", info
+    fetched = c.job("fetch", job)
+    assert fetched["type"] == "image", fetched
+    p = os.path.join(tmp, label + "-fetched.exr")
+    write(p, fetched["_payload"])
+    assert exr_equal(local, p) and exr_equal(p, local), f"{label}: fetched image differs from the local render"
+    c.close()
+
+
+def test_yaml_scene_with_textures_and_envmap(tmp, daemons):
+    scene_dir = os.path.join(tmp, "scene")
+    make_files(scene_dir)
+    path = os.path.join(scene_dir, "scene.yaml")
+    write(path, YAML_SCENE)
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    # checks, height, alpha and the sky: four files, each sent once.
+    submit_and_compare(tmp, d, path, 4, "yaml")
+
+
+def test_mitsuba_scene_with_texture_and_envmap(tmp, daemons):
+    scene_dir = os.path.join(tmp, "scene")
+    make_files(scene_dir)
+    path = os.path.join(scene_dir, "scene.xml")
+    write(path, XML_SCENE)
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    submit_and_compare(tmp, d, path, 2, "xml")
+
+
+if __name__ == "__main__":
+    t = Test()
+    t.run(test_yaml_scene_with_textures_and_envmap)
+    t.run(test_mitsuba_scene_with_texture_and_envmap)
+    t.exit()
