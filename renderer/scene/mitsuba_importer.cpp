@@ -449,7 +449,16 @@ void Importer::read_emitter(pugi::xml_node n, size_t index) {
         pugi::xml_node fn = find_param(e, "filename");
         if (!fn) fail(n, key, "envmap needs a 'filename' string");
         y["type"] = "envmap";
-        y["file"] = attr(fn, "value", key + ".filename");
+        // Relative to the main scene's folder, as every file is (Mitsuba's resolver), written
+        // relative to the folder of the file that names it, which the v1 parser resolves against.
+        const std::string written = attr(fn, "value", key + ".filename");
+        fs::path file(written);
+        if (file.is_relative()) {
+            fs::path base = fs::path(file_of(n)).parent_path();
+            fs::path rel = (dir_ / file).lexically_normal().lexically_relative(base.empty() ? fs::path(".") : base);
+            file = rel.empty() ? (dir_ / file).lexically_normal() : rel;
+        }
+        y["file"] = file.string();
         lines["file"] = line_of(fn);
         if (auto c = find_param(e, "scale")) y["scale"] = scalar(c, key), lines["scale"] = line_of(c);
         if (auto c = find_param(e, "to_world")) {
@@ -510,7 +519,10 @@ void Importer::load_includes(pugi::xml_node scene, std::vector<std::string>& cha
         } catch (const FileRefused& e) {
             fail(inc, key + ".filename", e.what());
         }
-        std::string shown = fs::path(written).is_absolute() ? gate().shown(p.string()) : written;
+        // Named like the scene file itself (as given, relative to the working directory), so
+        // that what the included file names resolves as it does for the scene file; a confined
+        // gate (a job's files) shows it relative to its root, never by a daemon path.
+        std::string shown = gate().is_confined() ? gate().shown(p.string()) : p.lexically_normal().string();
         sources_.push_back(std::make_unique<Source>(std::move(text), shown));
         Source& src = *sources_.back();
         parse_source(src);

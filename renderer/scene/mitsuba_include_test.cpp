@@ -6,6 +6,7 @@
 #include "io/file_gate.h"
 #include "scene/mitsuba_importer.h"
 #include "scene/test_helpers.h"
+#include "test_images.h"
 
 using namespace omega;
 using omega::test::all_warnings;
@@ -98,4 +99,19 @@ TEST(MitsubaInclude, CyclesMissingFilesAndEscapesAreRefusedWithFileAndLine) {
         EXPECT_NE(e.find("scene.xml:2: include.filename:"), std::string::npos) << ref << ": " << e;
         EXPECT_NE(e.find("'" + ref + "' is not a submitted asset"), std::string::npos) << e;  // as written, one message
     }
+}
+
+TEST(MitsubaInclude, FilesNamedInAnIncludedFileResolveAgainstTheMainScenesFolder) {
+    TempDir dir;
+    test::write_image_f32((dir.path / "sky.exr").string(), 2, 2, 3, std::vector<float>(12, 1.f));
+    dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    // As Mitsuba's file resolver does: relative to the scene file's folder, not the included one's.
+    dir.write("parts/lights.xml", scene(R"(<emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>
+<shape type="obj"><string name="filename" value="tri.obj"/></shape>)"));
+    auto xml = dir.write("scene.xml", scene(R"(<include filename="parts/lights.xml"/>)"));
+    SceneDesc d = import_mitsuba_file(xml.string());
+    ASSERT_EQ(d.lights.size(), 1u) << all_warnings(d);
+    EXPECT_EQ(std::filesystem::path(d.lights[0].file).lexically_normal(), (dir.path / "sky.exr").lexically_normal());
+    ASSERT_EQ(d.shapes.size(), 1u);
+    EXPECT_EQ(std::filesystem::path(d.shapes[0].file).lexically_normal(), (dir.path / "tri.obj").lexically_normal());
 }
