@@ -105,6 +105,9 @@ TEST(GltfEmbedded, GlbGivesTheSameSceneAsItsGltf) {
     SceneDesc b = import_gltf_file(data_file("blender_scene.glb"));
     EXPECT_FALSE(has_warning(b, "embedded")) << all_warnings(b);
     EXPECT_EQ(warnings_without(a, "blender_scene.gltf"), warnings_without(b, "blender_scene.glb"));
+    EXPECT_EQ(a.sensor.to_world.m, b.sensor.to_world.m);
+    EXPECT_EQ(b.lights.size(), 3u);
+    EXPECT_EQ(b.shapes.size(), 4u);
     ASSERT_EQ(a.materials.size(), b.materials.size());
     for (const auto& [name, ma] : a.materials) {
         const MaterialDesc& mb = b.materials.at(name);
