@@ -109,15 +109,23 @@ ScannedScene scan_scene(const std::string& scene_path) {
     s.name = fs::path(scene_path).stem().string();
     const fs::path dir = fs::path(scene_path).parent_path().empty() ? fs::path(".") : fs::path(scene_path).parent_path();
     SceneDesc desc;
+    // Images embedded in the scene file, by the relative name the YAML gives them.
+    std::map<std::string, std::shared_ptr<const EmbeddedImage>> embedded;
     try {
         if (is_mitsuba_path(scene_path) || is_gltf_path(scene_path)) {
             // Imported here, as `omega import` does: what travels is the v1 YAML it writes (equal
             // to the import when parsed again, scene_writer.h), with every file it names relative
             // to the scene's folder, so the walk below finds and sends them.
             SceneDesc imported = load_scene_file(scene_path);
-            s.yaml = write_scene_yaml(imported, dir.string());
-            desc = parse_scene_string(s.yaml, (dir / (s.name + ".yaml")).string());
-            desc.warnings = imported.warnings;
+            const std::string yaml_path = (dir / (s.name + ".yaml")).string();
+            const std::string images = embedded_image_dir(yaml_path);
+            for (const EmbeddedFile& f : embedded_files(imported, images)) embedded[f.rel] = f.image;
+            s.yaml = write_scene_yaml(imported, dir.string(), images);
+            // Parsed again as omegad will parse it, unless it names embedded images: their files
+            // exist only as bytes here (and the parser checks that each file it names exists).
+            std::vector<std::string> warnings = imported.warnings;
+            desc = embedded.empty() ? parse_scene_string(s.yaml, yaml_path) : std::move(imported);
+            desc.warnings = std::move(warnings);
         } else {
             s.yaml = read_file(scene_path);
             desc = parse_scene_string(s.yaml, scene_path);
@@ -173,6 +181,16 @@ ScannedScene scan_scene(const std::string& scene_path) {
         if (!holder.IsMap() || !holder["file"] || !holder["file"].IsScalar()) return;
         const bool mesh = holder["type"] && holder["type"].IsScalar() && holder["type"].as<std::string>() == "mesh";
         const std::string written = holder["file"].as<std::string>();
+        if (auto e = embedded.find(written); e != embedded.end()) {
+            ScannedAsset a;
+            a.name = written;  // clean and relative: "<stem>_textures/<name>"
+            a.path = scene_path + "#" + written;
+            a.data = std::shared_ptr<const std::string>(e->second, &e->second->bytes);
+            a.sha256 = sha256_bytes(*a.data);
+            a.size = a.data->size();
+            add(std::move(a));
+            return;
+        }
         fs::path p(written);
         if (p.is_relative()) p = dir / p;
         ScannedAsset a;

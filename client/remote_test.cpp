@@ -195,6 +195,27 @@ TEST(AssetScan, ImportedGltfTravelsWithItsBufferAndTexture) {
         EXPECT_EQ(by_name.at(f), sha256_file((d.path / f).string())) << f;
 }
 
+// A .glb's embedded base colour image travels as the file `omega import` would write for it,
+// named in the YAML, its bytes held in memory: no such file is made, and one of that name on
+// disk is not what is sent.
+TEST(AssetScan, GlbEmbeddedImageTravelsFromMemory) {
+    TempDir d;
+    const fs::path data = fs::path(omega::test::source_dir()) / "tests/data/gltf";
+    fs::copy_file(data / "blender_scene.glb", d.path / "s.glb");
+    d.write("s_textures/checker.png", "not the embedded image");
+    ScannedScene s = scan_scene((d.path / "s.glb").string());
+    std::map<std::string, const ScannedAsset*> by_name;
+    for (const auto& a : s.assets) by_name[a.name] = &a;
+    ASSERT_EQ(by_name.size(), 2u) << s.yaml;
+    EXPECT_EQ(by_name.at("s.glb")->sha256, sha256_file((d.path / "s.glb").string()));
+    const ScannedAsset& png = *by_name.at("s_textures/checker.png");
+    ASSERT_TRUE(png.data);
+    EXPECT_EQ(png.sha256, sha256_file((data / "checker.png").string()));
+    EXPECT_EQ(png.size, fs::file_size(data / "checker.png"));
+    EXPECT_NE(s.yaml.find(R"(file: "s_textures/checker.png")"), std::string::npos) << s.yaml;
+    for (const auto& w : s.warnings) EXPECT_EQ(w.find("embedded"), std::string::npos) << w;
+}
+
 TEST(Remote, UnreachableDaemonExits3NamingTheAddress) {
     TempDir d;
     JobArgs a;

@@ -17,6 +17,7 @@ namespace proto = omega::protocol;
 namespace {
 
 std::string read_asset(const ScannedAsset& a) {
+    if (a.data) return *a.data;  // embedded in the scene file, held since the scan
     std::ifstream in(a.path, std::ios::binary);
     if (!in) throw ClientError(kExitBadInput, fmt::format("{}: cannot read", a.path));
     std::stringstream ss;

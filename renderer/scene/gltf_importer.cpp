@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -152,6 +153,13 @@ class GltfImporter {
     void read_lights(const aiScene& s);
     void read_materials_and_shapes(const aiScene& s);
     std::string read_material(const aiMaterial& m, unsigned index, std::optional<EmitterDesc>& emitter);
+    // An image a material names: a file beside the glTF, or one embedded in it (uri "*N").
+    struct ImageRef {
+        std::string file;  // absolute path; embedded: the label "<glTF path>#images[i]"
+        std::shared_ptr<const EmbeddedImage> embedded;
+    };
+    std::optional<ImageRef> image_ref(const std::string& uri, const std::string& object);
+    std::shared_ptr<const EmbeddedImage> embedded_image(unsigned n, std::string& label, const std::string& object);
     Rgb texture_mean(const std::string& uri, const std::string& object, bool srgb, bool& ok);
     template <class T, class F>
     T parsed(const std::string& key, const YAML::Node& y, F&& f) {
@@ -165,6 +173,9 @@ class GltfImporter {
     YAML::Node json_;
     std::map<std::string, Mat4> node_world_;  // global transform of each named node (the first of a name)
     std::map<std::string, std::vector<std::string>> notes_;
+    const aiScene* scene_ = nullptr;  // while Assimp's scene is alive (read_assimp_scene's callback)
+    std::map<unsigned, std::shared_ptr<const EmbeddedImage>> embedded_;  // by Assimp's "*N"
+    std::set<std::string> embedded_names_;
     std::vector<std::string> note_order_;
     SceneDesc desc_;
 };
@@ -326,16 +337,98 @@ void GltfImporter::read_lights(const aiScene& s) {
     }
 }
 
+// A file name for an embedded image: the glTF image's name, else "image<i>", reduced to
+// [A-Za-z0-9._-] so that it names a file in one folder on any system (no '/', no leading '.').
+std::string image_file_stem(const std::string& name, size_t index) {
+    std::string out;
+    for (char c : name) {
+        const bool ok = std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || (c == '.' && !out.empty());
+        out += ok ? c : '_';
+        if (out.size() >= 64) break;
+    }
+    while (!out.empty() && out.back() == '.') out.pop_back();
+    return out.empty() || out.find_first_not_of('_') == std::string::npos ? fmt::format("image{}", index) : out;
+}
+
+// The extension its bytes call for: PNG and JPEG (what glTF allows) by their magic numbers,
+// else Assimp's hint (from the image's mimeType).
+std::string image_extension(const std::string& bytes, const char* hint) {
+    if (bytes.rfind("\x89PNG\r\n\x1a\n", 0) == 0) return "png";
+    if (bytes.rfind("\xff\xd8\xff", 0) == 0) return "jpg";
+    std::string h;
+    for (const char* p = hint; *p && h.size() < 8; ++p)
+        if (std::isalnum(static_cast<unsigned char>(*p))) h += char(std::tolower(static_cast<unsigned char>(*p)));
+    return h.empty() ? "bin" : h;
+}
+
+// Assimp's embedded texture N (a material's "*N") as an EmbeddedImage, made once. Assimp numbers
+// the images that carry their own data (a bufferView or a data: uri) in the order of glTF's
+// `images`, so the N-th of those in the JSON is glTF image i, whose name the file takes.
+std::shared_ptr<const EmbeddedImage> GltfImporter::embedded_image(unsigned n, std::string& label,
+                                                                  const std::string& object) {
+    if (!scene_ || n >= scene_->mNumTextures || !scene_->mTextures[n])
+        fail(object, fmt::format("texture '*{}': no such embedded image", n));
+    size_t index = n;
+    std::string json_name;
+    const YAML::Node images = json_["images"];
+    for (size_t i = 0, k = 0; images && images.IsSequence() && i < images.size(); ++i) {
+        const YAML::Node u = images[i]["uri"];
+        if (!images[i]["bufferView"] && !(u && u.IsScalar() && u.as<std::string>().rfind("data:", 0) == 0)) continue;
+        if (k++ == n) {
+            index = i;
+            if (images[i]["name"] && images[i]["name"].IsScalar()) json_name = images[i]["name"].as<std::string>();
+            break;
+        }
+    }
+    label = fmt::format("{}#images[{}]", fs::absolute(path_).lexically_normal().string(), index);
+    if (auto it = embedded_.find(n); it != embedded_.end()) return it->second;
+    const aiTexture& t = *scene_->mTextures[n];
+    // mHeight 0: mWidth bytes of an encoded file; otherwise raw texels, which glTF never has.
+    if (t.mHeight != 0 || !t.pcData) fail(object, fmt::format("images[{}]: not an encoded (PNG or JPEG) image", index));
+    auto img = std::make_shared<EmbeddedImage>();
+    img->bytes.assign(reinterpret_cast<const char*>(t.pcData), t.mWidth);
+    const std::string ext = image_extension(img->bytes, t.achFormatHint);
+    std::string stem = image_file_stem(json_name.empty() ? t.mFilename.C_Str() : json_name, index);
+    // A name that already ends in the extension ("wood.png") does not get it twice.
+    if (stem.size() > ext.size() + 1 && stem.compare(stem.size() - ext.size() - 1, std::string::npos, "." + ext) == 0)
+        stem.resize(stem.size() - ext.size() - 1);
+    img->name = fmt::format("{}.{}", stem, ext);
+    // Unique within the scene: a second image of the same name takes its index too.
+    if (!embedded_names_.insert(img->name).second) {
+        img->name = fmt::format("{}_{}.{}", stem, index, ext);
+        embedded_names_.insert(img->name);
+    }
+    return embedded_[n] = img;
+}
+
+std::optional<GltfImporter::ImageRef> GltfImporter::image_ref(const std::string& uri, const std::string& object) {
+    if (uri.empty()) return std::nullopt;
+    ImageRef r;
+    if (uri[0] == '*') {
+        unsigned n = 0;
+        const char* end = uri.data() + uri.size();
+        if (auto [p, ec] = std::from_chars(uri.data() + 1, end, n); ec != std::errc() || p != end)
+            fail(object, fmt::format("texture '{}': not an embedded image reference", uri));
+        r.embedded = embedded_image(n, r.file, object);
+        return r;
+    }
+    // Assimp hands data: uris over as "*N"; one that came through would name no file.
+    if (uri.rfind("data:", 0) == 0) fail(object, "a data: uri image that Assimp did not decode");
+    const std::string file = uri_decode(uri);
+    fs::path p = fs::path(file).is_relative() ? dir_ / file : fs::path(file);
+    r.file = p.string();
+    return r;
+}
+
 // The mean of a texture's channels (linear), for the places Omega cannot texture.
 Rgb GltfImporter::texture_mean(const std::string& uri, const std::string& object, bool srgb, bool& ok) {
     ok = false;
-    if (uri.empty() || uri[0] == '*' || uri.rfind("data:", 0) == 0) {
-        note("embedded images (.glb, data: uris) are not decoded: the factor alone is used", object);
-        return {1, 1, 1};
-    }
-    const std::string file = uri_decode(uri);
-    fs::path p = fs::path(file).is_relative() ? dir_ / file : fs::path(file);
-    ImagePixels img = decode_image(gate(), p.string(), file, fmt::format("{}: {}: ", path_, object), "texture");
+    std::optional<ImageRef> ref = image_ref(uri, object);
+    if (!ref) return {1, 1, 1};
+    const std::string where = fmt::format("{}: {}: ", path_, object);
+    const auto& e = ref->embedded;
+    ImagePixels img = e ? decode_image_bytes(e->bytes, e->name, e->name, where, "texture")
+                        : decode_image(gate(), ref->file, uri_decode(uri), where, "texture");
     const size_t nc = size_t(img.channels), n = size_t(img.width) * size_t(img.height);
     double sum[3] = {0, 0, 0};
     for (size_t i = 0; i < n; ++i)
@@ -366,6 +459,7 @@ std::string GltfImporter::read_material(const aiMaterial& m, unsigned index, std
     aiString tex;
     aiTextureMapMode wrap = aiTextureMapMode_Wrap;
     std::string base_tex;
+    std::optional<ImageRef> base_ref;  // the plastic's textured base colour
     if (m.GetTexture(aiTextureType_BASE_COLOR, 0, &tex) == AI_SUCCESS ||
         m.GetTexture(aiTextureType_DIFFUSE, 0, &tex) == AI_SUCCESS) {
         base_tex = tex.C_Str();
@@ -412,16 +506,17 @@ std::string GltfImporter::read_material(const aiMaterial& m, unsigned index, std
         y["int_ior"] = "1.5";
         y["ext_ior"] = "1";
         if (alpha > 0) y["alpha"] = num(alpha);
-        if (!base_tex.empty() && base_tex[0] != '*') {
+        base_ref = image_ref(base_tex, object);
+        if (base_ref) {
             YAML::Node b(YAML::NodeType::Map);
             b["type"] = "bitmap";
-            b["file"] = uri_decode(base_tex);
+            // An embedded image's name stands in for the file here; its bytes replace it below.
+            b["file"] = base_ref->embedded ? base_ref->embedded->name : uri_decode(base_tex);
             b["wrap"] = wrap == aiTextureMapMode_Clamp ? "clamp" : wrap == aiTextureMapMode_Mirror ? "mirror" : "repeat";
             y["diffuse_reflectance"] = b;
             if (colour.x != 1 || colour.y != 1 || colour.z != 1)
                 note("a baseColorFactor other than 1 on a textured base colour is ignored", object);
         } else {
-            if (!base_tex.empty()) note("embedded images (.glb, data: uris) are not decoded: the factor alone is used", object);
             y["diffuse_reflectance"] = rgb_node(colour);
         }
         note("dielectrics become Omega's plastic (a Fresnel coat of ior 1.5 over a diffuse base, Tungsten's model; "
@@ -461,6 +556,10 @@ std::string GltfImporter::read_material(const aiMaterial& m, unsigned index, std
         return parse_material_value(v, name, desc_.warnings);
     });
     md.loc = {path_, 0, object};
+    if (base_ref && base_ref->embedded && md.reflectance_texture) {
+        md.reflectance_texture->embedded = base_ref->embedded;
+        md.reflectance_texture->file = md.reflectance_texture->written = base_ref->file;
+    }
     desc_.materials[name] = md;
     return name;
 }
@@ -519,10 +618,12 @@ SceneDesc GltfImporter::run() {
     MeshFileOptions mo;
     mo.written = shown_;
     read_assimp_scene(gate(), path_, {path_, 0, ""}, mo, 0, [&](const aiScene& s) {
+        scene_ = &s;
         index_nodes(s.mRootNode, Mat4{}, 0);
         read_camera(s);
         read_lights(s);
         read_materials_and_shapes(s);
+        scene_ = nullptr;
     });
     flush_notes();
     if (desc_.lights.empty() && std::none_of(desc_.shapes.begin(), desc_.shapes.end(), [](const ShapeDesc& sh) {

@@ -193,16 +193,6 @@ TEST(GltfImporter, NodeTransformsPlaceTheMeshes) {
     EXPECT_TRUE(scene);
 }
 
-TEST(GltfImporter, GlbReadsTheSameSceneAndWarnsAboutEmbeddedImages) {
-    SceneDesc a = import_gltf_file(blender_file("blender_scene.gltf"));
-    SceneDesc b = import_gltf_file(blender_file("blender_scene.glb"));
-    EXPECT_EQ(a.sensor.to_world.m, b.sensor.to_world.m);
-    ASSERT_EQ(b.lights.size(), 3u);
-    EXPECT_EQ(b.shapes.size(), 4u);
-    EXPECT_TRUE(has_warning(b, "embedded images")) << all_warnings(b);
-    EXPECT_TRUE(Scene::build(b));
-}
-
 // Written by omega import and parsed back, the description is the same (meshes: [...] included).
 TEST(GltfImporter, WrittenYamlParsesBackToTheSameScene) {
     TempDir t;

@@ -89,7 +89,10 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
             auto& img = images[{bd.file, bd.raw}];
             if (!img) {
                 poll();
-                img = load_image(gate, bd.file, bd.raw, fmt::format("{}: {}: ", where(bd.loc), bd.loc.key), bd.written);
+                const std::string at = fmt::format("{}: {}: ", where(bd.loc), bd.loc.key);
+                // An embedded image is decoded from the bytes the scene file carried: no file to open.
+                img = bd.embedded ? load_image_bytes(bd.embedded->bytes, bd.embedded->name, bd.raw, at)
+                                  : load_image(gate, bd.file, bd.raw, at, bd.written);
             }
             tex->image = img;
             tex->filter = bd.filter;

@@ -89,12 +89,25 @@ struct SensorDesc {
     SourceLoc loc;
 };
 
+// An image that is no file of its own: a .glb's bufferView image or a glTF data: uri, held as the
+// encoded bytes the scene file carries (PNG, JPEG, ...). It is decoded from memory like any
+// image the gate read, so nothing is ever opened by its name. Immutable; shared by every texture
+// that uses it.
+struct EmbeddedImage {
+    std::string bytes;
+    // A file name for it, unique within its scene and deterministic ("checker.png", "image3.jpg"):
+    // what `omega import` and `omega submit` write it as (scene_writer.h).
+    std::string name;
+};
+
 // A `{type: bitmap, file: ...}` value: Mitsuba's bitmap texture. The file is checked through the
 // scene's FileGate at parse time and decoded when a shape's material needs it (Scene::build).
 // A texture: a bitmap file, or (checker) Mitsuba's procedural checkerboard, which uses only
-// to_uv, color0 and color1.
+// to_uv, color0 and color1, or (embedded) an image carried in memory.
 struct BitmapDesc {
-    std::string file;  // absolute path (empty for a checkerboard)
+    // Absolute path (empty for a checkerboard). Embedded: a label, "<scene file>#images[N]", which
+    // no loader opens; it keeps images that share one file apart in Scene::build's cache.
+    std::string file;
     TexFilter filter = TexFilter::Bilinear;
     TexWrap wrap = TexWrap::Repeat;
     bool raw = false;  // false: 8/16-bit data is sRGB-decoded to linear
@@ -104,6 +117,8 @@ struct BitmapDesc {
     SourceLoc file_loc;   // of the file value itself (key "....file")
     bool checker = false;
     Rgb color0{0.4f, 0.4f, 0.4f}, color1{0.2f, 0.2f, 0.2f};  // Mitsuba's defaults
+    // Set: the image is these bytes, not the file (which for_each_scene_file then passes over).
+    std::shared_ptr<const EmbeddedImage> embedded;
 };
 
 struct MaterialDesc {

@@ -2,9 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <unistd.h>
+
 #include <charconv>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <stdexcept>
 
 namespace omega {
@@ -51,6 +55,12 @@ std::string alpha(float au, float av) {
     return fmt::format(", alpha_u: {}, alpha_v: {}", num(au), num(av));
 }
 
+// Where files are written relative to, and the names the embedded images take.
+struct Names {
+    std::string base_dir;
+    std::map<const EmbeddedImage*, std::string> embedded;
+};
+
 // A path relative to base_dir when it is given and the path can be expressed so.
 std::string rel_path(const std::string& file, const std::string& base_dir) {
     if (base_dir.empty()) return file;
@@ -59,7 +69,7 @@ std::string rel_path(const std::string& file, const std::string& base_dir) {
     return !ec && !rel.empty() ? rel.generic_string() : file;
 }
 
-std::string bitmap(const BitmapDesc& t, const std::string& base_dir) {
+std::string bitmap(const BitmapDesc& t, const Names& names) {
     if (t.checker) {
         std::string s = fmt::format("{{type: checkerboard, color0: {}, color1: {}", rgb(t.color0), rgb(t.color1));
         if (!t.to_uv.is_identity()) {
@@ -69,7 +79,8 @@ std::string bitmap(const BitmapDesc& t, const std::string& base_dir) {
         }
         return s + "}";
     }
-    std::string s = fmt::format("{{type: bitmap, file: {}, filter: {}, wrap: {}, raw: {}", q(rel_path(t.file, base_dir)),
+    const std::string file = t.embedded ? names.embedded.at(t.embedded.get()) : rel_path(t.file, names.base_dir);
+    std::string s = fmt::format("{{type: bitmap, file: {}, filter: {}, wrap: {}, raw: {}", q(file),
                                 t.filter == TexFilter::Nearest ? "nearest" : "bilinear",
                                 t.wrap == TexWrap::Clamp ? "clamp" : t.wrap == TexWrap::Mirror ? "mirror" : "repeat", t.raw);
     if (!t.to_uv.is_identity()) {
@@ -80,10 +91,10 @@ std::string bitmap(const BitmapDesc& t, const std::string& base_dir) {
     return s + "}";
 }
 
-std::string material_bsdf(const MaterialDesc& m, const std::string& base_dir) {
+std::string material_bsdf(const MaterialDesc& m, const Names& names) {
     const Bsdf& b = m.bsdf;
     if (auto* d = std::get_if<DiffuseBsdf>(&b)) {
-        const std::string refl = m.reflectance_texture ? bitmap(*m.reflectance_texture, base_dir) : rgb(d->reflectance);
+        const std::string refl = m.reflectance_texture ? bitmap(*m.reflectance_texture, names) : rgb(d->reflectance);
         if (d->alpha > 0)
             return fmt::format("{{type: roughdiffuse, reflectance: {}, alpha: {}, fast_approx: {}, two_sided: {}}}", refl,
                                num(d->alpha), d->fast_approx, d->two_sided);
@@ -93,7 +104,7 @@ std::string material_bsdf(const MaterialDesc& m, const std::string& base_dir) {
         std::string s = "{type: conductor";
         if (c->has_ior) s += fmt::format(", eta: {}, k: {}", rgb(c->eta), rgb(c->k));
         s += fmt::format(", specular_reflectance: {}",
-                         m.specular_texture ? bitmap(*m.specular_texture, base_dir) : rgb(c->specular_reflectance));
+                         m.specular_texture ? bitmap(*m.specular_texture, names) : rgb(c->specular_reflectance));
         s += alpha(c->alpha_u, c->alpha_v);
         return s + fmt::format(", distribution: {}, two_sided: {}}}", dist(c->distribution), c->two_sided);
     }
@@ -114,7 +125,7 @@ std::string material_bsdf(const MaterialDesc& m, const std::string& base_dir) {
         std::string s = fmt::format("{{type: {}, diffuse_reflectance: {}, specular_reflectance: {}, int_ior: {}, ext_ior: 1, "
                                     "nonlinear: {}",
                                     p->alpha == 0 ? "plastic" : "roughplastic",
-                                    m.reflectance_texture ? bitmap(*m.reflectance_texture, base_dir) : rgb(p->diffuse_reflectance),
+                                    m.reflectance_texture ? bitmap(*m.reflectance_texture, names) : rgb(p->diffuse_reflectance),
                                     rgb(p->specular_reflectance), num(p->eta), p->nonlinear);
         if (p->alpha != 0) s += fmt::format(", alpha: {}, distribution: {}", num(p->alpha), dist(p->distribution));
         return s + fmt::format(", two_sided: {}}}", p->two_sided);
@@ -122,15 +133,15 @@ std::string material_bsdf(const MaterialDesc& m, const std::string& base_dir) {
     return "{type: black}";
 }
 
-std::string material(const MaterialDesc& m, const std::string& base_dir) {
-    std::string s = material_bsdf(m, base_dir);
+std::string material(const MaterialDesc& m, const Names& names) {
+    std::string s = material_bsdf(m, names);
     if (m.opacity_texture || m.opacity != 1.f) {
         s.pop_back();  // the closing brace
-        s += ", opacity: " + (m.opacity_texture ? bitmap(*m.opacity_texture, base_dir) : num(m.opacity)) + "}";
+        s += ", opacity: " + (m.opacity_texture ? bitmap(*m.opacity_texture, names) : num(m.opacity)) + "}";
     }
     if (m.bump_texture) {
         s.pop_back();
-        s += ", bump: " + bitmap(*m.bump_texture, base_dir) + ", bump_scale: " + num(m.bump_scale) + "}";
+        s += ", bump: " + bitmap(*m.bump_texture, names) + ", bump_scale: " + num(m.bump_scale) + "}";
     }
     return s;
 }
@@ -155,9 +166,66 @@ const char* filter_name(FilterType f) {
     return "?";
 }
 
+// The textures of every material, in the order the writer writes them.
+template <class F>
+void for_each_texture(const SceneDesc& d, F&& f) {
+    for (const auto& [name, m] : d.materials)
+        for (const auto* t : {&m.reflectance_texture, &m.specular_texture, &m.opacity_texture, &m.bump_texture})
+            if (*t) f(**t);
+}
+
+// `name` with "_N" before its extension.
+std::string numbered(const std::string& name, int n) {
+    const size_t dot = name.rfind('.');
+    if (dot == std::string::npos || dot == 0) return fmt::format("{}_{}", name, n);
+    return fmt::format("{}_{}{}", name.substr(0, dot), n, name.substr(dot));
+}
+
+// Writes `bytes` to `path` whole or not at all: a temporary beside it, then a rename.
+void write_file_atomically(const fs::path& path, const std::string& bytes) {
+    const fs::path tmp = path.parent_path() / fmt::format(".{}.tmp-{}", path.filename().string(), ::getpid());
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        out.write(bytes.data(), std::streamsize(bytes.size()));
+        out.flush();
+        if (!out) {
+            std::error_code ec;
+            fs::remove(tmp, ec);
+            throw std::runtime_error("cannot write '" + path.string() + "'");
+        }
+    }
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw std::runtime_error("cannot write '" + path.string() + "'");
+    }
+}
+
 }  // namespace
 
-std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
+std::string embedded_image_dir(const std::string& yaml_path) {
+    return fs::path(yaml_path).stem().string() + "_textures";
+}
+
+std::vector<EmbeddedFile> embedded_files(const SceneDesc& d, const std::string& embedded_dir) {
+    std::vector<EmbeddedFile> out;
+    std::set<const EmbeddedImage*> seen;
+    std::set<std::string> taken;
+    for_each_texture(d, [&](const BitmapDesc& t) {
+        if (!t.embedded || !seen.insert(t.embedded.get()).second) return;
+        const std::string base = t.embedded->name.empty() ? "image" : t.embedded->name;
+        std::string name = base;
+        for (int n = 2; taken.count(name); ++n) name = numbered(base, n);
+        taken.insert(name);
+        out.push_back({embedded_dir.empty() ? name : embedded_dir + "/" + name, t.embedded});
+    });
+    return out;
+}
+
+std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir, const std::string& embedded_dir) {
+    Names names{base_dir, {}};
+    for (const EmbeddedFile& f : embedded_files(d, embedded_dir)) names.embedded[f.image.get()] = f.rel;
     std::string o;
     o += "# Scene format v1, written by omega";
     if (!d.path.empty()) o += " from " + d.path;
@@ -203,7 +271,7 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
         if (name == implicit) continue;
         if (!any_material) o += "materials:\n";
         any_material = true;
-        o += fmt::format("  {}: {}\n", q(name), material(m, base_dir));
+        o += fmt::format("  {}: {}\n", q(name), material(m, names));
     }
 
     if (!d.shapes.empty()) o += "shapes:\n";
@@ -253,7 +321,15 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir) {
 
 void write_scene_file(const SceneDesc& desc, const std::string& path) {
     fs::path dir = fs::path(path).parent_path();
-    std::string text = write_scene_yaml(desc, dir.empty() ? "." : dir.string());
+    if (dir.empty()) dir = ".";
+    const std::string images = embedded_image_dir(path);
+    for (const EmbeddedFile& f : embedded_files(desc, images)) {
+        std::error_code ec;
+        fs::create_directories(dir / images, ec);
+        if (ec) throw std::runtime_error("cannot create '" + (dir / images).string() + "': " + ec.message());
+        write_file_atomically(dir / f.rel, f.image->bytes);
+    }
+    std::string text = write_scene_yaml(desc, dir.string(), images);
     std::ofstream out(path, std::ios::binary);
     if (!out) throw std::runtime_error("cannot write '" + path + "'");
     out << text;

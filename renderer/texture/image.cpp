@@ -44,16 +44,21 @@ float srgb_to_linear(float v) {
 
 ImagePixels decode_image(const FileGate& gate, const std::string& path, const std::string& written,
                          const std::string& where, const std::string& what) {
-    const std::string name = written.empty() ? gate.shown(path) : written;
-    auto fail = [&](const std::string& why) -> SceneError {
-        return SceneError(fmt::format("{}cannot read {} '{}': {}", where, what, name, why));
-    };
     std::string bytes;
     try {
         bytes = gate.read(path, kMaxImageFileBytes, written);
     } catch (const FileRefused& e) {
         throw SceneError(where + e.what());
     }
+    return decode_image_bytes(bytes, path, written.empty() ? gate.shown(path) : written, where, what);
+}
+
+ImagePixels decode_image_bytes(const std::string& bytes, const std::string& path, const std::string& name,
+                               const std::string& where, const std::string& what) {
+    auto fail = [&](const std::string& why) -> SceneError {
+        return SceneError(fmt::format("{}cannot read {} '{}': {}", where, what, name, why));
+    };
+    if (bytes.size() > kMaxImageFileBytes) throw fail("larger than 1 GiB");
     const std::string format = format_of(bytes, path);
     auto in = format.empty() ? nullptr : OIIO::ImageInput::create(format, false);
     (void)OIIO::geterror();  // create() leaves a message behind when it finds no reader
@@ -92,10 +97,10 @@ ImagePixels decode_image(const FileGate& gate, const std::string& path, const st
     return out;
 }
 
-std::shared_ptr<const Image> load_image(const FileGate& gate, const std::string& path, bool raw, const std::string& where,
-                                        const std::string& written) {
-    ImagePixels px = decode_image(gate, path, written, where, "texture");
-    const std::string name = written.empty() ? gate.shown(path) : written;
+namespace {
+
+// Decoded pixels as a reflectance texture (load_image's rules); `name` for messages.
+std::shared_ptr<const Image> texture_of(const ImagePixels& px, bool raw, const std::string& where, const std::string& name) {
     auto fail = [&](const std::string& why) -> SceneError {
         return SceneError(fmt::format("{}cannot read texture '{}': {}", where, name, why));
     };
@@ -121,6 +126,19 @@ std::shared_ptr<const Image> load_image(const FileGate& gate, const std::string&
         img->texels[i] = c;
     }
     return img;
+}
+
+}  // namespace
+
+std::shared_ptr<const Image> load_image(const FileGate& gate, const std::string& path, bool raw, const std::string& where,
+                                        const std::string& written) {
+    return texture_of(decode_image(gate, path, written, where, "texture"), raw, where,
+                      written.empty() ? gate.shown(path) : written);
+}
+
+std::shared_ptr<const Image> load_image_bytes(const std::string& bytes, const std::string& name, bool raw,
+                                              const std::string& where) {
+    return texture_of(decode_image_bytes(bytes, name, name, where, "texture"), raw, where, name);
 }
 
 }  // namespace omega

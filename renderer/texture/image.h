@@ -35,6 +35,12 @@ struct ImagePixels {
 ImagePixels decode_image(const FileGate& gate, const std::string& path, const std::string& written,
                          const std::string& where, const std::string& what = "image");
 
+// The same for bytes already in memory (an image embedded in a .glb): `path` only lends its
+// extension when the magic bytes name no format; `name` is what messages show. The same bound
+// on texels applies, checked before any pixel is decoded.
+ImagePixels decode_image_bytes(const std::string& bytes, const std::string& path, const std::string& name,
+                               const std::string& where, const std::string& what = "image");
+
 // Loads a texture. Integer pixel data (8- and 16-bit PNG, JPEG, ...) is
 // sRGB-encoded and decoded to linear unless `raw`; float data (EXR, HDR) is linear as stored.
 // One channel is grey; a second or fourth (alpha) channel is ignored. Because every image is a
@@ -42,5 +48,8 @@ ImagePixels decode_image(const FileGate& gate, const std::string& path, const st
 // Throws SceneError "<where>cannot read texture '<name>': <why>" on any failure.
 std::shared_ptr<const Image> load_image(const FileGate& gate, const std::string& path, bool raw, const std::string& where,
                                         const std::string& written = {});
+// load_image of encoded bytes in memory (an embedded image), named `name` in messages.
+std::shared_ptr<const Image> load_image_bytes(const std::string& bytes, const std::string& name, bool raw,
+                                              const std::string& where);
 
 }  // namespace omega

@@ -1,11 +1,13 @@
 """Scenes with image files go through the daemon: `omega submit` uploads every bitmap texture and
-the envmap image the scene names (a YAML scene and a Mitsuba XML scene), and the fetched image
-equals, bit for bit, `omega render` of the same scene with the same seed and spp."""
+the envmap image the scene names (a YAML scene and a Mitsuba XML scene), and the images a .glb
+embeds, and the fetched image equals, bit for bit, `omega render` of the same scene with the same
+seed and spp."""
 import os
+import shutil
 import struct
 import subprocess
 
-from harness import OMEGA, Daemon, Test, exr_equal, wait_state
+from harness import OMEGA, SOURCE_DIR, Daemon, Test, exr_equal, wait_state
 
 SPP, SEED = 8, 5
 
@@ -85,16 +87,18 @@ def make_files(scene_dir):
     write(os.path.join(scene_dir, "alpha.pfm"), pfm(8, 8, lambda x, y: (1.0 if (x - 4) ** 2 + (y - 4) ** 2 < 9 else 0.0,) * 3))
 
 
-def submit_and_compare(tmp, d, scene_path, expect_assets, label):
+def submit_and_compare(tmp, d, scene_path, expect_assets, label, spp=SPP):
     local = os.path.join(tmp, label + "-local.exr")
-    subprocess.run([OMEGA, "render", scene_path, "--spp", str(SPP), "--seed", str(SEED), "-o", local, "--threads", "2",
-                    "-q"], check=True, timeout=120, stdout=subprocess.DEVNULL)
+    subprocess.run([OMEGA, "render", scene_path, "--spp", str(spp), "--seed", str(SEED), "-o", local, "--threads", "2",
+                    "-q"], check=True, timeout=120, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     # From another folder: the client resolves the scene's files against the scene's own folder.
-    r = subprocess.run([OMEGA, "submit", scene_path, "--host", d.unix, "--spp", str(SPP), "--seed", str(SEED)],
+    r = subprocess.run([OMEGA, "submit", scene_path, "--host", d.unix, "--spp", str(spp), "--seed", str(SEED)],
                        capture_output=True, text=True, timeout=120, cwd=tmp)
     assert r.returncode == 0, r.stderr
     assert f"{expect_assets} asset(s), {expect_assets} sent" in r.stderr, r.stderr
-    assert "warning" not in r.stderr, r.stderr
+    # glTF's approximations are warned (by name); nothing else is.
+    warnings = [w for w in r.stderr.splitlines() if "warning" in w and ".glb: " not in w]
+    assert not warnings, r.stderr
     job = int(r.stdout.strip())
     c = d.client()
     info = wait_state(c, job, {"done", "failed"})
@@ -128,8 +132,24 @@ def test_mitsuba_scene_with_texture_and_envmap(tmp, daemons):
     submit_and_compare(tmp, d, path, 2, "xml")
 
 
+def test_glb_scene_with_embedded_textures(tmp, daemons):
+    # Blender's .glb carries its two images inside; the checker is a base colour texture, which
+    # travels as the file `omega import` would write (blender_scene_textures/checker.png), from
+    # the client's memory: no such file exists beside the scene. The roughness image only gives
+    # its mean at import. The .glb itself is the other asset.
+    scene_dir = os.path.join(tmp, "scene")
+    os.makedirs(scene_dir)
+    path = os.path.join(scene_dir, "blender_scene.glb")
+    shutil.copy(os.path.join(SOURCE_DIR, "tests", "data", "gltf", "blender_scene.glb"), path)
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    submit_and_compare(tmp, d, path, 2, "glb", spp=2)
+    assert not os.path.exists(os.path.join(scene_dir, "blender_scene_textures"))
+
+
 if __name__ == "__main__":
     t = Test()
     t.run(test_yaml_scene_with_textures_and_envmap)
     t.run(test_mitsuba_scene_with_texture_and_envmap)
+    t.run(test_glb_scene_with_embedded_textures)
     t.exit()

@@ -72,3 +72,23 @@ TEST_F(GltfCli, CameraFlagPicksTheOrthographicCamera) {
     EXPECT_EQ(bad.code, 2) << bad.output;
     EXPECT_NE(bad.output.find("--camera Nope: no such camera"), std::string::npos) << bad.output;
 }
+
+// Blender's .glb embeds its images: it renders the same image as its .gltf with the files beside
+// it (same seed, same spp), says nothing about embedded images, and `omega import` writes the
+// base colour image into <yaml stem>_textures/, from where the YAML renders the same image again.
+TEST_F(GltfCli, GlbWithEmbeddedImagesRendersLikeItsGltf) {
+    Result a = run_omega("render " + data("blender_scene.gltf") + " -q --spp 1 --threads 2 --seed 3 -o " + path("a.exr"));
+    ASSERT_EQ(a.code, 0) << a.output;
+    Result b = run_omega("render " + data("blender_scene.glb") + " -q --spp 1 --threads 2 --seed 3 -o " + path("b.exr"));
+    ASSERT_EQ(b.code, 0) << b.output;
+    EXPECT_EQ(b.output.find("embedded"), std::string::npos) << b.output;
+    omega::ExrImage ia = omega::read_exr(path("a.exr")), ib = omega::read_exr(path("b.exr"));
+    EXPECT_EQ(ia.rgb, ib.rgb);
+
+    Result imp = run_omega("import " + data("blender_scene.glb") + " -o " + path("out.yaml"));
+    ASSERT_EQ(imp.code, 0) << imp.output;
+    EXPECT_TRUE(fs::exists(path("out_textures/checker.png")));
+    Result c = run_omega("render " + path("out.yaml") + " -q --spp 1 --threads 2 --seed 3 -o " + path("c.exr"));
+    ASSERT_EQ(c.code, 0) << c.output;
+    EXPECT_EQ(omega::read_exr(path("c.exr")).rgb, ia.rgb);
+}
