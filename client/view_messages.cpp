@@ -107,6 +107,11 @@ proto::Result<ViewCommand, DecodeError> decode_view_command(std::string_view tex
     if (text.size() > kMaxViewCommandBytes)
         return proto::fail(DecodeError::out_of_range, "message: over " + std::to_string(kMaxViewCommandBytes) + " bytes");
     if (!proto::is_valid_utf8(text)) return proto::fail(DecodeError::invalid_value, "message: not valid UTF-8");
+    // JSON allows no raw control character (JSON.stringify escapes them); yaml-cpp, which reads
+    // it, would take a NUL for the end of its input and hand back a broken scalar.
+    for (char ch : text)
+        if (static_cast<unsigned char>(ch) < 0x20 && ch != '\t' && ch != '\n' && ch != '\r')
+            return proto::fail(DecodeError::invalid_value, "message: a raw control character (JSON escapes them)");
     YAML::Node root;
     try {
         root.reset(YAML::Load(std::string(text)));
@@ -137,8 +142,10 @@ proto::Result<ViewCommand, DecodeError> decode_view_command(std::string_view tex
     if (c.kind == ViewCommandKind::login) {
         c.user = r.str("user", kMaxCredentialBytes);
         c.token = r.str("token", kMaxCredentialBytes);
-        if (r.ok() && !printable(c.user)) r.fail(DecodeError::invalid_value, "user", "not printable text");
-        if (r.ok() && !printable(c.token)) r.fail(DecodeError::invalid_value, "token", "not printable text");
+        if (r.ok() && !(printable(c.user) && proto::is_valid_utf8(c.user)))
+            r.fail(DecodeError::invalid_value, "user", "not printable text");
+        if (r.ok() && !(printable(c.token) && proto::is_valid_utf8(c.token)))
+            r.fail(DecodeError::invalid_value, "token", "not printable text");
     }
     if (!r.ok()) return r.failure();
     return c;

@@ -4,6 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include "shared_data.h"
+
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -73,6 +79,26 @@ TEST(ViewMessages, CommandsRoundTrip) {
     ASSERT_TRUE(r) << r.message();
     EXPECT_EQ(r->user, c.user);
     EXPECT_EQ(r->token, c.token);
+}
+
+// Every input the fuzzer once failed on (fuzz/regressions/view_messages/): refused, or decoded
+// to a command whose own encoding decodes to the same command.
+TEST(ViewMessages, FuzzerFindingsRoundTripOrAreRefused) {
+    const auto dir = std::filesystem::path(omega::test::source_dir()) / "fuzz/regressions/view_messages";
+    int n = 0;
+    for (const auto& f : std::filesystem::directory_iterator(dir)) {
+        std::ifstream in(f.path(), std::ios::binary);
+        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        ++n;
+        auto c = decode_view_command(text);
+        if (!c) continue;
+        auto again = decode_view_command(encode_view_command(*c));
+        ASSERT_TRUE(again) << f.path() << ": " << again.message() << "\nfrom: " << encode_view_command(*c);
+        EXPECT_EQ(again->kind, c->kind) << f.path();
+        EXPECT_EQ(again->user, c->user) << f.path();
+        EXPECT_EQ(again->token, c->token) << f.path();
+    }
+    EXPECT_GE(n, 2);
 }
 
 TEST(ViewMessages, FloatTileLayoutAndNoNaN) {
