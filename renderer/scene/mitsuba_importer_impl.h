@@ -64,7 +64,7 @@ struct Source {
 class Importer {
 public:
     Importer(const std::string& text, const std::string& file, const MitsubaOptions& opt)
-        : text_(text), file_(file), opt_(opt) {
+        : file_(file), opt_(opt) {
         sources_.push_back(std::make_unique<Source>(text, file));
         dir_ = fs::path(file).parent_path();
         if (dir_.empty()) dir_ = ".";
@@ -255,7 +255,6 @@ private:
         return it->second;
     }
 
-    std::string text_;
     std::string file_;
     MitsubaOptions opt_;
     std::vector<std::unique_ptr<Source>> sources_;  // [0]: the scene file
