@@ -1,5 +1,7 @@
 #include "bsdf/bsdf.h"
 
+#include <algorithm>
+#include <limits>
 #include <type_traits>
 
 #include "bsdf/models.h"
@@ -44,23 +46,56 @@ std::optional<BsdfSample> bsdf_sample(const Bsdf& b, const Vec3& wo, float uc, V
 }
 
 namespace {
-// A copy of model m with the textured parameter `value` looked up at uv and the texture dropped.
-template <class T>
-const Bsdf& looked_up(const T& m, Rgb T::*value, const BitmapTexture* T::*tex, Vec2 uv, Bsdf& tmp) {
-    T q = m;
-    q.*value = (q.*tex)->eval(uv);
-    q.*tex = nullptr;
-    tmp = q;
-    return tmp;
+// Each textured parameter looked up at uv, its texture dropped (the copy is then untextured).
+void look_up(Rgb& value, const BitmapTexture*& tex, Vec2 uv) {
+    if (!tex) return;
+    value = tex->eval(uv);
+    tex = nullptr;
 }
+float scalar_alpha(const BitmapTexture& tex, Vec2 uv, float lo = kMinTexturedAlpha, float hi = 1.f) {
+    return texel_alpha(tex.eval(uv), lo, hi);
+}
+void look_up_alpha(float& au, float& av, const BitmapTexture*& tex, Vec2 uv) {
+    if (!tex) return;
+    au = av = scalar_alpha(*tex, uv);
+    tex = nullptr;
+}
+
+void look_up_all(DiffuseBsdf& m, Vec2 uv) {
+    look_up(m.reflectance, m.reflectance_tex, uv);
+    if (m.alpha_tex) {  // Oren-Nayar: any slope >= 0 (0 is Lambert), as the scene format allows
+        m.alpha = scalar_alpha(*m.alpha_tex, uv, 0.f, std::numeric_limits<float>::infinity());
+        m.alpha_tex = nullptr;
+    }
+}
+void look_up_all(ConductorBsdf& m, Vec2 uv) {
+    look_up(m.specular_reflectance, m.specular_reflectance_tex, uv);
+    look_up_alpha(m.alpha_u, m.alpha_v, m.alpha_tex, uv);
+}
+void look_up_all(DielectricBsdf& m, Vec2 uv) {
+    look_up(m.specular_reflectance, m.specular_reflectance_tex, uv);
+    look_up(m.specular_transmittance, m.specular_transmittance_tex, uv);
+    look_up_alpha(m.alpha_u, m.alpha_v, m.alpha_tex, uv);
+}
+void look_up_all(ThinDielectricBsdf& m, Vec2 uv) {
+    look_up(m.specular_reflectance, m.specular_reflectance_tex, uv);
+    look_up(m.specular_transmittance, m.specular_transmittance_tex, uv);
+}
+void look_up_all(PlasticBsdf& m, Vec2 uv) {
+    look_up(m.diffuse_reflectance, m.diffuse_reflectance_tex, uv);
+    look_up(m.specular_reflectance, m.specular_reflectance_tex, uv);
+    if (m.alpha_tex) {
+        m.alpha = scalar_alpha(*m.alpha_tex, uv);
+        m.alpha_tex = nullptr;
+    }
+}
+void look_up_all(BlackBsdf&, Vec2) {}
 }  // namespace
 
 const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
-    if (const auto* p = std::get_if<PlasticBsdf>(&b))
-        return looked_up(*p, &PlasticBsdf::diffuse_reflectance, &PlasticBsdf::diffuse_reflectance_tex, uv, tmp);
-    if (const auto* c = std::get_if<ConductorBsdf>(&b))
-        return looked_up(*c, &ConductorBsdf::specular_reflectance, &ConductorBsdf::specular_reflectance_tex, uv, tmp);
-    return looked_up(std::get<DiffuseBsdf>(b), &DiffuseBsdf::reflectance, &DiffuseBsdf::reflectance_tex, uv, tmp);
+    tmp = b;
+    std::visit([&](auto& m) { look_up_all(m, uv); }, tmp);
+    return tmp;
 }
 
 uint8_t bsdf_lobes(const Bsdf& b) {

@@ -59,6 +59,8 @@ struct DiffuseBsdf {
     float alpha = 0;
     // Mitsuba's useFastApprox: the qualitative model's A + B form without interreflection.
     bool fast_approx = false;
+    // A roughness texture for alpha (see resolve_textured: a scalar per hit).
+    const BitmapTexture* alpha_tex = nullptr;
 };
 
 // Conductor: alpha == 0 is a smooth mirror. Without eta/k (has_ior false) Fresnel is 1.
@@ -71,6 +73,8 @@ struct ConductorBsdf {
     bool two_sided = true;
     // As DiffuseBsdf::reflectance_tex, for specular_reflectance (which then holds the mean).
     const BitmapTexture* specular_reflectance_tex = nullptr;
+    // Isotropic roughness per hit: alpha_u = alpha_v = the texture's scalar (resolve_textured).
+    const BitmapTexture* alpha_tex = nullptr;
 };
 
 // Dielectric interface; eta = int_ior / ext_ior. alpha == 0 is smooth.
@@ -80,6 +84,10 @@ struct DielectricBsdf {
     Rgb specular_transmittance{1.f, 1.f, 1.f};
     float alpha_u = 0, alpha_v = 0;
     MicrofacetType distribution = MicrofacetType::GGX;
+    // As ConductorBsdf's textures.
+    const BitmapTexture* specular_reflectance_tex = nullptr;
+    const BitmapTexture* specular_transmittance_tex = nullptr;
+    const BitmapTexture* alpha_tex = nullptr;
 };
 
 // Thin dielectric sheet (a window pane): an infinitely thin slab of relative IOR eta = int_ior /
@@ -91,6 +99,8 @@ struct ThinDielectricBsdf {
     float eta = 1.5f;
     Rgb specular_reflectance{1.f, 1.f, 1.f};
     Rgb specular_transmittance{1.f, 1.f, 1.f};
+    const BitmapTexture* specular_reflectance_tex = nullptr;
+    const BitmapTexture* specular_transmittance_tex = nullptr;
 };
 
 // Plastic: a smooth dielectric coat over a Lambertian base (Tungsten's plastic / rough_plastic,
@@ -114,6 +124,8 @@ struct PlasticBsdf {
     bool two_sided = true;
     // As DiffuseBsdf::reflectance_tex, for diffuse_reflectance (which then holds the mean).
     const BitmapTexture* diffuse_reflectance_tex = nullptr;
+    const BitmapTexture* specular_reflectance_tex = nullptr;
+    const BitmapTexture* alpha_tex = nullptr;  // rough coat only
 
     void set_eta(float e);
 };
@@ -138,13 +150,34 @@ inline bool bsdf_has_nondelta(const Bsdf& b) { return bsdf_lobes(b) & (kLobeDiff
 // Returns `b` itself when nothing in it is textured (no copy: the common case costs one test),
 // otherwise `tmp`, filled with `b` whose textured parameters are looked up at `uv`.
 // Every evaluation of a scene BSDF at a hit goes through this (path tracer, subpath walks,
-// connections), so all integrators see the same textured albedo.
+// connections), so all integrators see the same textured albedo and roughness.
+//
+// A roughness texture gives a scalar per hit: the luminance (Rec. 709 weights) of its value,
+// as Mitsuba 3's eval_1 takes it (0.6 took the channel average; the two agree on grey maps),
+// clamped to [kMinTexturedAlpha, 1]: a texel of 0 would make a delta lobe of a surface the path
+// classifier counts as glossy, and the microfacet densities are not defined there.
+constexpr float kMinTexturedAlpha = 1e-3f;
+// A roughness texel's scalar: luminance, within [lo, hi] (NaN becomes lo). Oren-Nayar's alpha
+// takes [0, inf), the microfacet models' [kMinTexturedAlpha, 1].
+inline float texel_alpha(Rgb v, float lo = kMinTexturedAlpha, float hi = 1.f) {
+    const float lum = 0.212671f * v.x + 0.715160f * v.y + 0.072169f * v.z;
+    return lum >= lo ? (lum < hi ? lum : hi) : lo;
+}
 const Bsdf& resolve_textured(const Bsdf& b, Vec2 uv, Bsdf& tmp);
+namespace detail {
+inline bool has_texture(const DiffuseBsdf& m) { return m.reflectance_tex || m.alpha_tex; }
+inline bool has_texture(const ConductorBsdf& m) { return m.specular_reflectance_tex || m.alpha_tex; }
+inline bool has_texture(const DielectricBsdf& m) {
+    return m.specular_reflectance_tex || m.specular_transmittance_tex || m.alpha_tex;
+}
+inline bool has_texture(const ThinDielectricBsdf& m) { return m.specular_reflectance_tex || m.specular_transmittance_tex; }
+inline bool has_texture(const PlasticBsdf& m) {
+    return m.diffuse_reflectance_tex || m.specular_reflectance_tex || m.alpha_tex;
+}
+inline bool has_texture(const BlackBsdf&) { return false; }
+}  // namespace detail
 inline bool bsdf_is_textured(const Bsdf& b) {
-    if (const auto* d = std::get_if<DiffuseBsdf>(&b)) return d->reflectance_tex != nullptr;
-    if (const auto* p = std::get_if<PlasticBsdf>(&b)) return p->diffuse_reflectance_tex != nullptr;
-    if (const auto* c = std::get_if<ConductorBsdf>(&b)) return c->specular_reflectance_tex != nullptr;
-    return false;
+    return std::visit([](const auto& m) { return detail::has_texture(m); }, b);
 }
 inline const Bsdf& resolve_bsdf(const Bsdf& b, Vec2 uv, Bsdf& tmp) {
     return bsdf_is_textured(b) ? resolve_textured(b, uv, tmp) : b;

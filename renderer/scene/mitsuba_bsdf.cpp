@@ -41,9 +41,8 @@ Rgb Importer::texture_average(pugi::xml_node tex, const std::string& key) {
     Rgb avg{float(sum[0] / double(n)), float(sum[1] / double(n)), float(sum[2] / double(n))};
     for (int ch = 0; ch < 3; ++ch) avg[ch] = std::clamp(avg[ch], 0.f, 1.f);
     warn(tex, key,
-         fmt::format("bitmap '{}': this parameter takes no texture in Omega (a diffuse or plastic reflectance, a "
-                     "conductor's specular_reflectance, a mask's opacity do); using its average colour [{:.4g}, {:.4g}, "
-                     "{:.4g}]{}",
+         fmt::format("bitmap '{}': this parameter takes no texture in Omega (reflectances, transmittances, alpha and "
+                     "a mask's opacity do); using its average colour [{:.4g}, {:.4g}, {:.4g}]{}",
                      file, avg.x, avg.y, avg.z, srgb ? " (sRGB-decoded)" : ""));
     return avg;
 }
@@ -209,9 +208,13 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         bool any = false;
         for (const char* p : {"alpha", "alpha_u", "alpha_v"})
             if (auto c = find_param(e, p)) {
-                if (std::string(c.name()) == "texture" || std::string(c.name()) == "ref") {
-                    warn(c, key, std::string(p) + " textures are not supported; using alpha " + def);
-                    y["alpha"] = def;
+                const bool tex = std::string(c.name()) == "texture" || std::string(c.name()) == "ref";
+                if (tex && std::string(p) == "alpha") {
+                    y[p] = colour(c, key + ".alpha", true);  // a roughness texture, looked up per hit
+                } else if (tex) {
+                    warn(c, key, std::string(p) + " textures are not supported (an isotropic alpha texture is); using " + p +
+                                     " " + def);
+                    y[p] = def;
                 } else {
                     y[p] = scalar(c, key);
                 }
@@ -303,12 +306,8 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         put_colour("reflectance", "reflectance", true);
         if (!lines.count("reflectance")) put_colour("reflectance", "diffuse_reflectance", true);
         if (auto c = find_param(e, "alpha")) {
-            if (std::string(c.name()) == "texture" || std::string(c.name()) == "ref") {
-                warn(c, key, "alpha textures are not supported; using alpha 0.2");
-                y["alpha"] = "0.2";
-            } else {
-                y["alpha"] = scalar(c, key);
-            }
+            const bool tex = std::string(c.name()) == "texture" || std::string(c.name()) == "ref";
+            y["alpha"] = tex ? colour(c, key + ".alpha", true) : scalar(c, key);
             lines["alpha"] = line_of(c);
         } else {
             y["alpha"] = "0.2";  // Mitsuba's default
@@ -324,8 +323,8 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         // Mitsuba 3 and 0.6 share the parameters and defaults (BK7 in air, Ks = Kt = 1).
         y["type"] = type == "thindielectric" ? "thindielectric" : "dielectric";
         for (const char* p : {"int_ior", "ext_ior"}) put(p, p);
-        put_colour("specular_reflectance", "specular_reflectance");
-        put_colour("specular_transmittance", "specular_transmittance");
+        put_colour("specular_reflectance", "specular_reflectance", true);
+        put_colour("specular_transmittance", "specular_transmittance", true);
         if (type == "roughdielectric") put_alpha("0.1");
     } else if (type == "plastic" || type == "roughplastic") {
         // Mitsuba 3 and 0.6 share the model and the defaults (polypropylene in air, nonlinear
@@ -334,7 +333,7 @@ YAML::Node Importer::read_bsdf(pugi::xml_node n, const std::string& key, bool tw
         y["type"] = type;
         put_colour("diffuse_reflectance", "diffuse_reflectance", true);
         if (!lines.count("diffuse_reflectance")) y["diffuse_reflectance"] = "0.5";
-        put_colour("specular_reflectance", "specular_reflectance");
+        put_colour("specular_reflectance", "specular_reflectance", true);
         put("int_ior", "int_ior");
         if (!lines.count("int_ior")) y["int_ior"] = "polypropylene";
         put("ext_ior", "ext_ior");

@@ -68,9 +68,9 @@ void expect_same(const SceneDesc& a, const SceneDesc& b) {
         ASSERT_TRUE(b.materials.count(name)) << name;
         const Bsdf &x = m.bsdf, &y = b.materials.at(name).bsdf;
         EXPECT_EQ(m.bump_scale, b.materials.at(name).bump_scale) << name;
-        for (auto t : {&MaterialDesc::reflectance_texture, &MaterialDesc::specular_texture, &MaterialDesc::opacity_texture,
-                       &MaterialDesc::bump_texture}) {
-            const auto &tx = m.*t, &ty = b.materials.at(name).*t;
+        const auto slots_a = m.texture_slots(), slots_b = b.materials.at(name).texture_slots();
+        for (size_t i = 0; i < slots_a.size(); ++i) {
+            const auto &tx = *slots_a[i], &ty = *slots_b[i];
             ASSERT_EQ(tx.has_value(), ty.has_value()) << name;
             if (tx) {
                 EXPECT_EQ(tx->file, ty->file) << name;
@@ -681,6 +681,14 @@ TEST(MitsubaImporter, BitmapMapsToATexture) {
 <bsdf type="plastic" id="plastic"><ref name="diffuse_reflectance" id="t"/></bsdf>
 <bsdf type="conductor" id="metal"><ref name="specular_reflectance" id="t"/></bsdf>
 <bsdf type="plastic" id="coat"><ref name="specular_reflectance" id="t"/></bsdf>
+<bsdf type="conductor" id="odd"><ref name="eta" id="t"/><rgb name="k" value="1"/></bsdf>
+<bsdf type="roughconductor" id="rough"><ref name="alpha" id="t"/></bsdf>
+<bsdf type="roughdielectric" id="glass"><ref name="specular_reflectance" id="t"/><ref name="specular_transmittance" id="t"/>
+  <ref name="alpha" id="t"/></bsdf>
+<bsdf type="thindielectric" id="pane"><ref name="specular_transmittance" id="t"/></bsdf>
+<bsdf type="roughplastic" id="rp"><ref name="alpha" id="t"/></bsdf>
+<bsdf type="roughdiffuse" id="on"><ref name="alpha" id="t"/></bsdf>
+<bsdf type="roughconductor" id="aniso"><ref name="alpha_u" id="t"/><float name="alpha_v" value="0.2"/></bsdf>
 <bsdf type="diffuse" id="spun"><texture type="bitmap" name="reflectance"><string name="filename" value="tex.ppm"/>
   <transform name="to_uv"><rotate x="1" angle="30"/></transform></texture></bsdf>
 <shape type="cube"><ref id="inline"/></shape>
@@ -690,6 +698,13 @@ TEST(MitsubaImporter, BitmapMapsToATexture) {
 <shape type="cube"><ref id="spun"/></shape>
 <shape type="obj"><string name="filename" value="tri.obj"/><boolean name="flip_tex_coords" value="false"/></shape>
 <shape type="cube"><ref id="coat"/></shape>
+<shape type="cube"><ref id="odd"/></shape>
+<shape type="cube"><ref id="rough"/></shape>
+<shape type="cube"><ref id="glass"/></shape>
+<shape type="cube"><ref id="pane"/></shape>
+<shape type="cube"><ref id="rp"/></shape>
+<shape type="cube"><ref id="on"/></shape>
+<shape type="cube"><ref id="aniso"/></shape>
 )" + std::string(kLitBox) + "</scene>");
     dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
     SceneDesc d = import_mitsuba_file(xml.string());
@@ -720,9 +735,21 @@ TEST(MitsubaImporter, BitmapMapsToATexture) {
     ASSERT_TRUE(d.materials.at("metal").specular_texture);
     EXPECT_EQ(d.materials.at("metal").specular_texture->file, file);
     EXPECT_FALSE(has_warning(d, "bsdf(metal)")) << all_warnings(d);
-    EXPECT_TRUE(has_warning(d, "bsdf(coat).specular_reflectance: bitmap 'tex.ppm': this parameter takes no texture "
-                               "in Omega"))
+    // So are a plastic's specular_reflectance, a dielectric's reflectance and transmittance and
+    // every isotropic alpha; a conductor's eta and an anisotropic alpha_u are not.
+    ASSERT_TRUE(d.materials.at("coat").specular_texture);
+    for (const char* m : {"rough", "glass", "rp", "on"}) {
+        ASSERT_TRUE(d.materials.at(m).alpha_texture) << m;
+        EXPECT_EQ(d.materials.at(m).alpha_texture->file, file) << m;
+    }
+    EXPECT_TRUE(d.materials.at("glass").specular_texture && d.materials.at("glass").transmittance_texture);
+    EXPECT_TRUE(d.materials.at("pane").transmittance_texture);
+    EXPECT_FALSE(d.materials.at("pane").specular_texture);
+    for (const char* m : {"coat", "rough", "glass", "pane", "rp", "on"})
+        EXPECT_FALSE(has_warning(d, std::string("bsdf(") + m + ")")) << m << ": " << all_warnings(d);
+    EXPECT_TRUE(has_warning(d, "bsdf(odd).eta: bitmap 'tex.ppm': this parameter takes no texture in Omega"))
         << all_warnings(d);
+    EXPECT_TRUE(has_warning(d, "bsdf(aniso): alpha_u textures are not supported")) << all_warnings(d);
     EXPECT_TRUE(has_warning(d, "using its average colour [0.5, 0, 0]")) << all_warnings(d);
     EXPECT_TRUE(has_warning(d, "bsdf(spun).reflectance: to_uv mixes in the z axis")) << all_warnings(d);
     EXPECT_TRUE(d.materials.at("spun").reflectance_texture->to_uv.is_identity());

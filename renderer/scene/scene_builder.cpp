@@ -2,6 +2,7 @@
 // shape uses are not built, and their textures are not read. Each image file is decoded once,
 // however many materials name it.
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <unordered_map>
@@ -64,6 +65,67 @@ EnvMapLight load_envmap(const FileGate& gate, const LightDesc& d) {
     }
 }
 
+// Points model T's texture slot at `tex` and puts the texture's mean in the parameter, if `b`
+// is a T. Returns whether it was.
+template <class T>
+bool attach(Bsdf& b, Rgb T::*value, const BitmapTexture* T::*slot, const BitmapTexture* tex) {
+    auto* m = std::get_if<T>(&b);
+    if (!m) return false;
+    m->*slot = tex;
+    m->*value = tex->mean();
+    return true;
+}
+
+// The material's textures on its BSDF. The parser accepts each texture only on the models
+// listed here, so a refusal means a hand-built SceneDesc, named all the same.
+template <class TextureFor>
+void attach_textures(const MaterialDesc& md, Bsdf& b, TextureFor&& texture_for) {
+    auto refuse = [](const BitmapDesc& bd, const char* models) {
+        throw SceneError(fmt::format("{}: {}: only {} take this texture", where(bd.loc), bd.loc.key, models));
+    };
+    if (const auto& bd = md.reflectance_texture) {
+        const BitmapTexture* t = texture_for(*bd);
+        if (!attach(b, &DiffuseBsdf::reflectance, &DiffuseBsdf::reflectance_tex, t) &&
+            !attach(b, &PlasticBsdf::diffuse_reflectance, &PlasticBsdf::diffuse_reflectance_tex, t))
+            refuse(*bd, "a diffuse or plastic reflectance");
+    }
+    if (const auto& bd = md.specular_texture) {
+        const BitmapTexture* t = texture_for(*bd);
+        if (!attach(b, &ConductorBsdf::specular_reflectance, &ConductorBsdf::specular_reflectance_tex, t) &&
+            !attach(b, &DielectricBsdf::specular_reflectance, &DielectricBsdf::specular_reflectance_tex, t) &&
+            !attach(b, &ThinDielectricBsdf::specular_reflectance, &ThinDielectricBsdf::specular_reflectance_tex, t) &&
+            !attach(b, &PlasticBsdf::specular_reflectance, &PlasticBsdf::specular_reflectance_tex, t))
+            refuse(*bd, "conductors, dielectrics and plastics");
+    }
+    if (const auto& bd = md.transmittance_texture) {
+        const BitmapTexture* t = texture_for(*bd);
+        if (!attach(b, &DielectricBsdf::specular_transmittance, &DielectricBsdf::specular_transmittance_tex, t) &&
+            !attach(b, &ThinDielectricBsdf::specular_transmittance, &ThinDielectricBsdf::specular_transmittance_tex, t))
+            refuse(*bd, "dielectrics");
+    }
+    if (const auto& bd = md.alpha_texture) {
+        // The mean stands in where no hit is at hand (and decides the lobe class: glossy, since
+        // a textured roughness is never below kMinTexturedAlpha).
+        const BitmapTexture* t = texture_for(*bd);
+        const Rgb mean = t->mean();
+        if (auto* c = std::get_if<ConductorBsdf>(&b)) {
+            c->alpha_tex = t;
+            c->alpha_u = c->alpha_v = texel_alpha(mean);
+        } else if (auto* d = std::get_if<DielectricBsdf>(&b)) {
+            d->alpha_tex = t;
+            d->alpha_u = d->alpha_v = texel_alpha(mean);
+        } else if (auto* p = std::get_if<PlasticBsdf>(&b); p && p->alpha > 0) {
+            p->alpha_tex = t;
+            p->alpha = texel_alpha(mean);
+        } else if (auto* r = std::get_if<DiffuseBsdf>(&b); r && r->alpha > 0) {
+            r->alpha_tex = t;
+            r->alpha = texel_alpha(mean, 0.f, std::numeric_limits<float>::infinity());
+        } else {
+            refuse(*bd, "rough conductors, dielectrics, plastics and diffuse surfaces");
+        }
+    }
+}
+
 }  // namespace
 
 std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<bool()>& cancelled) {
@@ -109,26 +171,7 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
             throw SceneError(fmt::format("{}: shapes[{}].material: unknown material '{}'", where(sd.loc), i, sd.material));
         uint32_t idx = uint32_t(s->materials_.size());
         Bsdf b = m->second.bsdf;
-        if (const auto& bd = m->second.reflectance_texture) {
-            if (auto* d = std::get_if<DiffuseBsdf>(&b)) {
-                d->reflectance_tex = texture_for(*bd);
-                d->reflectance = d->reflectance_tex->mean();
-            } else if (auto* p = std::get_if<PlasticBsdf>(&b)) {
-                p->diffuse_reflectance_tex = texture_for(*bd);
-                p->diffuse_reflectance = p->diffuse_reflectance_tex->mean();
-            } else {
-                throw SceneError(fmt::format("{}: {}: only a diffuse or plastic reflectance can be a texture", where(bd->loc),
-                                             bd->loc.key));
-            }
-        }
-        if (const auto& bd = m->second.specular_texture) {
-            auto* c = std::get_if<ConductorBsdf>(&b);
-            if (!c)
-                throw SceneError(fmt::format("{}: {}: only a conductor's specular_reflectance can be a texture here",
-                                             where(bd->loc), bd->loc.key));
-            c->specular_reflectance_tex = texture_for(*bd);
-            c->specular_reflectance = c->specular_reflectance_tex->mean();
-        }
+        attach_textures(m->second, b, texture_for);
         s->materials_.push_back(b);
         material_index.emplace(sd.material, idx);
         return idx;

@@ -128,8 +128,13 @@ struct MaterialDesc {
     // Diffuse and plastic: the (diffuse) reflectance is this bitmap (the bsdf's own value is then unused).
     // Last, so that {name, bsdf, loc} still initialises an untextured material.
     std::optional<BitmapDesc> reflectance_texture;
-    // Conductor: specular_reflectance is this texture.
+    // Conductor, dielectric, thin dielectric, plastic: specular_reflectance is this texture.
     std::optional<BitmapDesc> specular_texture;
+    // Dielectric, thin dielectric: specular_transmittance is this texture.
+    std::optional<BitmapDesc> transmittance_texture;
+    // Conductor, dielectric, rough plastic, rough diffuse: the isotropic roughness alpha is this
+    // texture's scalar per hit (resolve_textured; the bsdf's alpha then holds its mean).
+    std::optional<BitmapDesc> alpha_texture;
     // Mask (Mitsuba's `mask` wrapper, YAML `opacity`): the surface is there with probability
     // opacity (1 = opaque), a constant or opacity_texture's first channel; see Scene::intersect.
     float opacity = 1.f;
@@ -137,6 +142,13 @@ struct MaterialDesc {
     // Bump map (Mitsuba's `bumpmap` wrapper): height = bump_scale x the texture's first channel.
     std::optional<BitmapDesc> bump_texture;
     float bump_scale = 1.f;
+
+    // Every texture slot, in the order the writer writes them (one list for the writer, the
+    // asset scan and the file checks).
+    std::array<const std::optional<BitmapDesc>*, 6> texture_slots() const {
+        return {&reflectance_texture, &specular_texture, &transmittance_texture, &alpha_texture, &opacity_texture,
+                &bump_texture};
+    }
 };
 
 struct EmitterDesc {

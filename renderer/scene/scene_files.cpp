@@ -10,7 +10,7 @@ void for_each_scene_file(const SceneDesc& desc, const std::function<void(const S
     for (const ShapeDesc& s : desc.shapes)
         if (s.type == ShapeType::Mesh && !s.file.empty()) fn({s.file, s.written, s.file_loc.file.empty() ? s.loc : s.file_loc, "mesh"});
     for (const auto& [name, m] : desc.materials)
-        for (const auto* t : {&m.reflectance_texture, &m.specular_texture, &m.opacity_texture, &m.bump_texture})
+        for (const auto* t : m.texture_slots())
             if (*t && !(*t)->checker && !(*t)->embedded)  // a checkerboard or an embedded image reads no file
                 fn({(*t)->file, (*t)->written, (*t)->file_loc.file.empty() ? (*t)->loc : (*t)->file_loc, "texture"});
     for (const LightDesc& l : desc.lights)

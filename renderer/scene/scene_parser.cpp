@@ -147,10 +147,17 @@ namespace {
 
 enum class MatType { Diffuse, RoughDiffuse, Conductor, Dielectric, ThinDielectric, Plastic, RoughPlastic, Black };
 
-void parse_alpha(ParamBag& b, float& au, float& av) {
+BitmapDesc parse_bitmap(const ParamValue& v);
+
+// A roughness texture (a mapping) in `alpha` goes to `tex`; au and av then hold a placeholder
+// that Scene::build replaces with the texture's mean. alpha_u/alpha_v take numbers only.
+void parse_alpha(ParamBag& b, float& au, float& av, std::optional<BitmapDesc>& tex) {
     bool iso = b.has("alpha"), aniso = b.has("alpha_u") || b.has("alpha_v");
     if (iso && aniso) b.get("alpha")->fail("give either alpha or alpha_u/alpha_v, not both");
-    if (iso) {
+    if (iso && b.get("alpha")->is_map()) {
+        tex = parse_bitmap(*b.get("alpha"));
+        au = av = 0.1f;
+    } else if (iso) {
         au = av = float_in(b, "alpha", 0.f, 0, false, 1, false);
     } else if (aniso) {
         b.require("alpha_u");
@@ -301,6 +308,25 @@ BitmapDesc parse_bitmap(const ParamValue& v) {
     return t;
 }
 
+// A colour in [0, 1] that may instead be a texture mapping, which then goes to `tex` (the
+// colour keeps `def` until Scene::build puts the texture's mean there).
+Rgb rgb_or_texture(ParamBag& b, const char* key, Rgb def, std::optional<BitmapDesc>& tex) {
+    if (b.has(key) && b.get(key)->is_map()) {
+        tex = parse_bitmap(*b.get(key));
+        return def;
+    }
+    return rgb_in(b, key, def, 0, 1);
+}
+
+// Oren-Nayar's alpha (any slope >= 0) or a texture of it.
+float roughdiffuse_alpha(ParamBag& b, std::optional<BitmapDesc>& tex) {
+    if (b.has("alpha") && b.get("alpha")->is_map()) {
+        tex = parse_bitmap(*b.get("alpha"));
+        return 0.2f;
+    }
+    return float_in(b, "alpha", 0.2f, 0, false, kInf, true);
+}
+
 MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::vector<std::string>& warnings) {
     ParamBag b(v);
     MaterialDesc m;
@@ -318,13 +344,10 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
         case MatType::Diffuse:
         case MatType::RoughDiffuse: {
             DiffuseBsdf d;
-            if (b.has("reflectance") && b.get("reflectance")->is_map())
-                m.reflectance_texture = parse_bitmap(*b.get("reflectance"));
-            else
-                d.reflectance = rgb_in(b, "reflectance", d.reflectance, 0, 1);
+            d.reflectance = rgb_or_texture(b, "reflectance", d.reflectance, m.reflectance_texture);
             d.two_sided = b.get_bool("two_sided", true);
             if (type == MatType::RoughDiffuse) {  // Oren-Nayar, Mitsuba's roughdiffuse
-                d.alpha = float_in(b, "alpha", 0.2f, 0, false, kInf, true);
+                d.alpha = roughdiffuse_alpha(b, m.alpha_texture);
                 d.fast_approx = b.get_bool("fast_approx", false);
             }
             m.bsdf = d;
@@ -348,11 +371,8 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
                 c.k = rgb_in(b, "k", c.k, 0, kInf);
                 c.has_ior = true;
             }
-            if (b.has("specular_reflectance") && b.get("specular_reflectance")->is_map())
-                m.specular_texture = parse_bitmap(*b.get("specular_reflectance"));
-            else
-                c.specular_reflectance = rgb_in(b, "specular_reflectance", c.specular_reflectance, 0, 1);
-            parse_alpha(b, c.alpha_u, c.alpha_v);
+            c.specular_reflectance = rgb_or_texture(b, "specular_reflectance", c.specular_reflectance, m.specular_texture);
+            parse_alpha(b, c.alpha_u, c.alpha_v, m.alpha_texture);
             c.distribution = parse_distribution(b);
             c.two_sided = b.get_bool("two_sided", true);
             m.bsdf = c;
@@ -367,9 +387,10 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
             if (d.eta == 1.f)
                 warnings.push_back(fmt::format("{}:{}: {}: int_ior equals ext_ior, the interface is invisible",
                                                m.loc.file, m.loc.line, m.loc.key));
-            d.specular_reflectance = rgb_in(b, "specular_reflectance", d.specular_reflectance, 0, 1);
-            d.specular_transmittance = rgb_in(b, "specular_transmittance", d.specular_transmittance, 0, 1);
-            parse_alpha(b, d.alpha_u, d.alpha_v);
+            d.specular_reflectance = rgb_or_texture(b, "specular_reflectance", d.specular_reflectance, m.specular_texture);
+            d.specular_transmittance =
+                rgb_or_texture(b, "specular_transmittance", d.specular_transmittance, m.transmittance_texture);
+            parse_alpha(b, d.alpha_u, d.alpha_v, m.alpha_texture);
             d.distribution = parse_distribution(b);
             m.bsdf = d;
             break;
@@ -380,19 +401,17 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
             float int_ior = parse_ior(b, "int_ior", 1.5046f);
             float ext_ior = parse_ior(b, "ext_ior", 1.000277f);
             d.eta = int_ior / ext_ior;
-            d.specular_reflectance = rgb_in(b, "specular_reflectance", d.specular_reflectance, 0, 1);
-            d.specular_transmittance = rgb_in(b, "specular_transmittance", d.specular_transmittance, 0, 1);
+            d.specular_reflectance = rgb_or_texture(b, "specular_reflectance", d.specular_reflectance, m.specular_texture);
+            d.specular_transmittance =
+                rgb_or_texture(b, "specular_transmittance", d.specular_transmittance, m.transmittance_texture);
             m.bsdf = d;
             break;
         }
         case MatType::Plastic:
         case MatType::RoughPlastic: {
             PlasticBsdf p;
-            if (b.has("diffuse_reflectance") && b.get("diffuse_reflectance")->is_map())
-                m.reflectance_texture = parse_bitmap(*b.get("diffuse_reflectance"));
-            else
-                p.diffuse_reflectance = rgb_in(b, "diffuse_reflectance", p.diffuse_reflectance, 0, 1);
-            p.specular_reflectance = rgb_in(b, "specular_reflectance", p.specular_reflectance, 0, 1);
+            p.diffuse_reflectance = rgb_or_texture(b, "diffuse_reflectance", p.diffuse_reflectance, m.reflectance_texture);
+            p.specular_reflectance = rgb_or_texture(b, "specular_reflectance", p.specular_reflectance, m.specular_texture);
             // Mitsuba's defaults: polypropylene in air.
             float int_ior = parse_ior(b, "int_ior", 1.49f);
             float ext_ior = parse_ior(b, "ext_ior", 1.000277f);
@@ -401,7 +420,12 @@ MaterialDesc parse_material(const ParamValue& v, const std::string& name, std::v
             if (type == MatType::RoughPlastic) {
                 // Isotropic only, as Mitsuba's roughplastic and Tungsten's rough_plastic (alpha_u/v
                 // are reported as unknown keys). alpha 0 is the smooth coat, as for conductors.
-                p.alpha = float_in(b, "alpha", 0.1f, 0, false, 1, false);
+                if (b.has("alpha") && b.get("alpha")->is_map()) {
+                    m.alpha_texture = parse_bitmap(*b.get("alpha"));
+                    p.alpha = 0.1f;  // Scene::build puts the texture's mean here
+                } else {
+                    p.alpha = float_in(b, "alpha", 0.1f, 0, false, 1, false);
+                }
                 p.distribution = parse_distribution(b);
             }
             p.two_sided = b.get_bool("two_sided", true);

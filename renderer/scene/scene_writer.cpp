@@ -93,19 +93,25 @@ std::string bitmap(const BitmapDesc& t, const Names& names) {
 
 std::string material_bsdf(const MaterialDesc& m, const Names& names) {
     const Bsdf& b = m.bsdf;
+    // A parameter as its texture where it has one, else as its value.
+    auto tex_or = [&](const std::optional<BitmapDesc>& t, const std::string& value) {
+        return t ? bitmap(*t, names) : value;
+    };
+    auto alpha_of = [&](float au, float av) {
+        return m.alpha_texture ? ", alpha: " + bitmap(*m.alpha_texture, names) : alpha(au, av);
+    };
     if (auto* d = std::get_if<DiffuseBsdf>(&b)) {
-        const std::string refl = m.reflectance_texture ? bitmap(*m.reflectance_texture, names) : rgb(d->reflectance);
+        const std::string refl = tex_or(m.reflectance_texture, rgb(d->reflectance));
         if (d->alpha > 0)
             return fmt::format("{{type: roughdiffuse, reflectance: {}, alpha: {}, fast_approx: {}, two_sided: {}}}", refl,
-                               num(d->alpha), d->fast_approx, d->two_sided);
+                               tex_or(m.alpha_texture, num(d->alpha)), d->fast_approx, d->two_sided);
         return fmt::format("{{type: diffuse, reflectance: {}, two_sided: {}}}", refl, d->two_sided);
     }
     if (auto* c = std::get_if<ConductorBsdf>(&b)) {
         std::string s = "{type: conductor";
         if (c->has_ior) s += fmt::format(", eta: {}, k: {}", rgb(c->eta), rgb(c->k));
-        s += fmt::format(", specular_reflectance: {}",
-                         m.specular_texture ? bitmap(*m.specular_texture, names) : rgb(c->specular_reflectance));
-        s += alpha(c->alpha_u, c->alpha_v);
+        s += ", specular_reflectance: " + tex_or(m.specular_texture, rgb(c->specular_reflectance));
+        s += alpha_of(c->alpha_u, c->alpha_v);
         return s + fmt::format(", distribution: {}, two_sided: {}}}", dist(c->distribution), c->two_sided);
     }
     if (auto* d = std::get_if<DielectricBsdf>(&b)) {
@@ -113,21 +119,24 @@ std::string material_bsdf(const MaterialDesc& m, const Names& names) {
         return fmt::format(
             "{{type: dielectric, int_ior: {}, ext_ior: 1, specular_reflectance: {}, specular_transmittance: {}{}, "
             "distribution: {}}}",
-            num(d->eta), rgb(d->specular_reflectance), rgb(d->specular_transmittance), alpha(d->alpha_u, d->alpha_v),
+            num(d->eta), tex_or(m.specular_texture, rgb(d->specular_reflectance)),
+            tex_or(m.transmittance_texture, rgb(d->specular_transmittance)), alpha_of(d->alpha_u, d->alpha_v),
             dist(d->distribution));
     }
     if (auto* d = std::get_if<ThinDielectricBsdf>(&b))
         return fmt::format("{{type: thindielectric, int_ior: {}, ext_ior: 1, specular_reflectance: {}, "
                            "specular_transmittance: {}}}",
-                           num(d->eta), rgb(d->specular_reflectance), rgb(d->specular_transmittance));
+                           num(d->eta), tex_or(m.specular_texture, rgb(d->specular_reflectance)),
+                           tex_or(m.transmittance_texture, rgb(d->specular_transmittance)));
     if (auto* p = std::get_if<PlasticBsdf>(&b)) {
         // int_ior / ext_ior reproduces eta exactly with ext_ior 1 (and with it fdr_int).
         std::string s = fmt::format("{{type: {}, diffuse_reflectance: {}, specular_reflectance: {}, int_ior: {}, ext_ior: 1, "
                                     "nonlinear: {}",
                                     p->alpha == 0 ? "plastic" : "roughplastic",
-                                    m.reflectance_texture ? bitmap(*m.reflectance_texture, names) : rgb(p->diffuse_reflectance),
-                                    rgb(p->specular_reflectance), num(p->eta), p->nonlinear);
-        if (p->alpha != 0) s += fmt::format(", alpha: {}, distribution: {}", num(p->alpha), dist(p->distribution));
+                                    tex_or(m.reflectance_texture, rgb(p->diffuse_reflectance)),
+                                    tex_or(m.specular_texture, rgb(p->specular_reflectance)), num(p->eta), p->nonlinear);
+        if (p->alpha != 0)
+            s += fmt::format(", alpha: {}, distribution: {}", tex_or(m.alpha_texture, num(p->alpha)), dist(p->distribution));
         return s + fmt::format(", two_sided: {}}}", p->two_sided);
     }
     return "{type: black}";
@@ -170,7 +179,7 @@ const char* filter_name(FilterType f) {
 template <class F>
 void for_each_texture(const SceneDesc& d, F&& f) {
     for (const auto& [name, m] : d.materials)
-        for (const auto* t : {&m.reflectance_texture, &m.specular_texture, &m.opacity_texture, &m.bump_texture})
+        for (const auto* t : m.texture_slots())
             if (*t) f(**t);
 }
 

@@ -223,6 +223,80 @@ shapes:
               std::string::npos);
 }
 
+// Reflectance, transmittance and roughness take textures on every model that has them: each is
+// looked up per hit (a roughness as the texel's luminance, clamped so that a textured microfacet
+// lobe never turns into a delta), and the writer keeps them.
+TEST(TextureScene, DielectricPlasticAndRoughnessTextures) {
+    Fixture f;
+    SceneDesc d = f.parse(R"(materials:
+  glass: {type: dielectric, alpha: {type: checkerboard, color0: 0.3, color1: 0},
+          specular_reflectance: {type: checkerboard, color0: 1, color1: 0.5},
+          specular_transmittance: {type: checkerboard, color0: [0.2, 0.4, 0.6], color1: 1}}
+  pane: {type: thindielectric, specular_reflectance: {type: checkerboard, color0: 0.9, color1: 0.1},
+         specular_transmittance: {type: bitmap, file: textures/wood.png, filter: nearest}}
+  coat: {type: roughplastic, alpha: {type: checkerboard, color0: [1, 0, 0], color1: 1},
+         specular_reflectance: {type: checkerboard, color0: 0.25, color1: 1}}
+  metal: {type: conductor, alpha: {type: checkerboard, color0: 0.05, color1: 0.5}}
+  rough: {type: roughdiffuse, alpha: {type: checkerboard, color0: 0, color1: 0.9}}
+shapes:
+  - {type: rectangle, material: glass}
+  - {type: rectangle, material: pane}
+  - {type: rectangle, material: coat}
+  - {type: rectangle, material: metal}
+  - {type: rectangle, material: rough}
+)");
+    for (const char* m : {"glass", "coat", "metal", "rough"}) EXPECT_TRUE(d.materials.at(m).alpha_texture) << m;
+    auto scene = Scene::build(d);
+    auto bsdf = [&](int i) -> const Bsdf& { return scene->materials()[scene->shapes()[size_t(i)].material]; };
+    const Vec2 c0{0.1f, 0.1f}, c1{0.7f, 0.1f};  // a check of color0, one of color1
+    Bsdf tmp;
+    for (int i = 0; i < 5; ++i) EXPECT_TRUE(bsdf_is_textured(bsdf(i))) << i;
+
+    auto glass0 = std::get<DielectricBsdf>(resolve_bsdf(bsdf(0), c0, tmp));
+    EXPECT_FLOAT_EQ(glass0.alpha_u, 0.3f);
+    EXPECT_EQ(glass0.alpha_v, glass0.alpha_u);
+    EXPECT_EQ(glass0.specular_reflectance, Rgb(1.f));
+    EXPECT_EQ(glass0.specular_transmittance, (Rgb{0.2f, 0.4f, 0.6f}));
+    EXPECT_FALSE(bsdf_is_textured(Bsdf(glass0)));
+    auto glass1 = std::get<DielectricBsdf>(resolve_bsdf(bsdf(0), c1, tmp));
+    EXPECT_EQ(glass1.alpha_u, kMinTexturedAlpha);  // a texel of 0 stays a (very sharp) glossy lobe
+    EXPECT_EQ(glass1.specular_reflectance, Rgb(0.5f));
+    EXPECT_EQ(glass1.specular_transmittance, Rgb(1.f));
+    EXPECT_EQ(bsdf_lobes(bsdf(0)) & kLobeDelta, 0);  // classified by its mean roughness: glossy
+
+    auto pane = std::get<ThinDielectricBsdf>(resolve_bsdf(bsdf(1), c1, tmp));
+    EXPECT_EQ(pane.specular_reflectance, Rgb(0.1f));
+    EXPECT_EQ(pane.specular_transmittance, (Rgb{0.f, 0.f, 1.f})) << "wood.png's right texel (blue)";
+
+    auto coat0 = std::get<PlasticBsdf>(resolve_bsdf(bsdf(2), c0, tmp));
+    EXPECT_NEAR(coat0.alpha, 0.212671f, 1e-6f);  // the luminance of red
+    EXPECT_EQ(coat0.specular_reflectance, Rgb(0.25f));
+    EXPECT_EQ(std::get<PlasticBsdf>(resolve_bsdf(bsdf(2), c1, tmp)).alpha, 1.f);
+
+    EXPECT_FLOAT_EQ(std::get<ConductorBsdf>(resolve_bsdf(bsdf(3), c0, tmp)).alpha_u, 0.05f);
+    EXPECT_FLOAT_EQ(std::get<ConductorBsdf>(resolve_bsdf(bsdf(3), c1, tmp)).alpha_v, 0.5f);
+    EXPECT_FLOAT_EQ(std::get<ConductorBsdf>(bsdf(3)).alpha_u, 0.275f);  // the mean
+
+    EXPECT_EQ(std::get<DiffuseBsdf>(resolve_bsdf(bsdf(4), c0, tmp)).alpha, 0.f);  // Lambert
+    EXPECT_FLOAT_EQ(std::get<DiffuseBsdf>(resolve_bsdf(bsdf(4), c1, tmp)).alpha, 0.9f);
+
+    // The writer keeps every texture where it was.
+    std::string yaml = write_scene_yaml(d, "");
+    SceneDesc back = parse_scene_string(yaml, (f.dir.path / "back.yaml").string());
+    for (const auto& [name, m] : d.materials) {
+        const auto a = m.texture_slots(), b = back.materials.at(name).texture_slots();
+        for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i]->has_value(), b[i]->has_value()) << name << " slot " << i << yaml;
+    }
+    EXPECT_EQ(back.materials.at("pane").transmittance_texture->file, d.materials.at("pane").transmittance_texture->file);
+
+    // Anisotropic roughness takes numbers; a smooth plastic has no alpha to texture.
+    EXPECT_NE(f.error("materials: {m: {type: conductor, alpha_u: {type: checkerboard}, alpha_v: 0.1}}\nshapes: []\n")
+                  .find("materials.m.alpha_u"),
+              std::string::npos);
+    EXPECT_NE(f.error("materials: {m: {type: plastic, alpha: {type: checkerboard}}}\nshapes: []\n").find("alpha"),
+              std::string::npos);
+}
+
 // A masked quad in front of a floor: opacity 0 is not there for any query, opacity 1 is opaque,
 // a bitmap's first channel decides per uv, and a fractional opacity lets through the fraction
 // 1 - opacity of the rays (a hash coin, the same for the same ray).

@@ -75,6 +75,46 @@ TEST(MaterialsAgreement, MaskedBoxesBumpedWall) {
     fs::remove(png);
 }
 
+// Textured roughness, reflectance and transmittance (resolve_textured per hit, in the walks and
+// in every connection's densities): the boxes as a rough conductor with a checkered alpha and
+// tint, and a rough glass with a checkered alpha and transmittance; the back wall a rough
+// plastic with a checkered alpha. All three lobes are glossy, so every integrator reaches them.
+TEST(MaterialsAgreement, TexturedRoughnessAndTransmittance) {
+    SceneDesc d = cornell();
+    auto checker = [](Rgb c0, Rgb c1, float scale) {
+        BitmapDesc t;
+        t.checker = true;
+        t.color0 = c0;
+        t.color1 = c1;
+        t.to_uv.m = {scale, 0, 0, 0, scale, 0};
+        return t;
+    };
+    MaterialDesc metal{"metal", ConductorBsdf{}, {}};
+    metal.alpha_texture = checker(Rgb(0.05f), Rgb(0.4f), 2);
+    metal.specular_texture = checker({0.9f, 0.7f, 0.3f}, Rgb(0.6f), 3);
+    MaterialDesc glass{"glass", DielectricBsdf{}, {}};
+    glass.alpha_texture = checker(Rgb(0.1f), Rgb(0.5f), 2);
+    glass.transmittance_texture = checker({0.6f, 0.9f, 1.f}, Rgb(1.f), 2);
+    d.materials["metal"] = metal;
+    d.materials["glass"] = glass;
+    PlasticBsdf coat;
+    coat.alpha = 0.1f;
+    coat.diffuse_reflectance = Rgb(0.6f);
+    MaterialDesc& wall = d.materials.at("BackWallBSDF");
+    wall.bsdf = coat;
+    wall.reflectance_texture.reset();
+    wall.alpha_texture = checker(Rgb(0.05f), Rgb(0.3f), 4);
+    bool first = true;
+    for (auto& s : d.shapes)
+        if (s.type == ShapeType::Cube) {
+            s.material = first ? "metal" : "glass";
+            first = false;
+        }
+    const IntegratorType P = IntegratorType::Path, L = IntegratorType::Light, B = IntegratorType::Bdpt;
+    expect_same(d, P, B, 256, 128, 2, "textured roughness path-bdpt");
+    expect_same(d, L, B, 256, 128, 2, "textured roughness light-bdpt");
+}
+
 // The tall box as a thin sheet (windows on every face): the camera sees it directly, and E S ...
 // paths are beyond a light tracer, so path tracing and bdpt only (bdpt's light subpaths cross the
 // sheet in importance mode, and its delta vertices must drop out of the connections and MIS).
