@@ -1,5 +1,7 @@
 #include "integrator/bdpt_tracer.h"
 
+#include "pathspace/mirror_connector.h"
+
 namespace omega {
 
 BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
@@ -13,6 +15,15 @@ BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
     // towards the lens, so it goes one vertex further; longer connections are skipped by k.
     use_t0_ = plan_.t0 && set_.allows(2, 0);
     if (use_t0_ && md < kMaxUnboundedDepth) light_limits_.max_vertices = md + 1;
+    // Light tracing through planar mirrors (pathspace/mirror_connector.h). With a pinhole or an
+    // orthographic sensor a chain y -> mirror -> camera has no other strategy in the light tracer
+    // (the mirror is delta, the lens cannot be hit), so the connector's weight is 1. BDPT and a
+    // hittable lens would need it inside the MIS routine, which is not done: there the chain
+    // stays what it was (sampled by bdpt's other strategies where they can, else missing).
+    if (desc.type == IntegratorType::Light && desc.mirror_connector && !scene.sensor().lens_hittable()) {
+        auto m = std::make_shared<PlanarMirrors>(find_planar_mirrors(scene));
+        if (!m->empty()) mirrors_ = std::move(m);
+    }
 }
 
 Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
@@ -61,6 +72,14 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             else L += weighted;
         }
     }
+    // The chain adds one edge to strategy (s, 1): k = s + 1.
+    if (mirrors_)
+        for (int s = 1; s <= n_light && (max_depth_ < 0 || s + 1 <= max_depth_); ++s)
+            for (size_t i = 0; i < mirrors_->list.size(); ++i) {
+                sampler.start_dimension(dims::mirror_sensor(s, int(i)));
+                if (auto c = connect_sensor_via_mirror(scene_, mirrors_->list[i], lit, s, sampler, stats))
+                    splats.push_back({c->film, c->L});
+            }
     return L;
 }
 

@@ -1,9 +1,17 @@
 #include "integrator/path_tracer.h"
 
 #include "integrator/mis.h"
+#include "pathspace/mirror_connector.h"
 #include "scene/spawn.h"
 
 namespace omega {
+
+PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings) : scene_(scene), settings_(settings) {
+    if (settings_.light_sampling && settings_.mirror_connector) {
+        auto m = std::make_shared<PlanarMirrors>(find_planar_mirrors(scene));
+        if (!m->empty()) mirrors_ = std::move(m);
+    }
+}
 
 namespace {
 
@@ -38,6 +46,19 @@ Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const
     return f * ls->Li * (w / pdf_light_sa);
 }
 
+Rgb PathTracer::sample_direct_via_mirrors(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local,
+                                          const Bsdf& bsdf, int k, Sampler& sampler, TracerStats& stats) const {
+    Rgb L(0.f);
+    for (size_t i = 0; i < mirrors_->list.size(); ++i) {
+        sampler.start_dimension(dims::mirror_light(k, int(i)));
+        auto ms = sample_light_via_mirror(scene_, mirrors_->list[i], hit, shading, wo_local, bsdf, sampler, stats);
+        if (!ms) continue;
+        const float w = ms->delta_light ? 1.f : power_heuristic(ms->pdf_light_sa, ms->pdf_bsdf_sa);
+        L += ms->L * w;
+    }
+    return L;
+}
+
 Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
     const int max_depth = settings_.max_depth >= 0 ? settings_.max_depth : kMaxUnboundedDepth;
     const bool nee = settings_.light_sampling;
@@ -47,6 +68,16 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
     Vec3 prev_p = ray.o;
     float eta_scale = 1.f;      // undoes radiance scaling at refraction for Russian roulette
     const auto& sel = scene_.light_selection();
+    // The planar-mirror connector's other strategy: BSDF sampling from a vertex x that ran the
+    // connector, one delta reflection off mirror `via_mirror`, then a light. Such a chain is
+    // weighed against the connector's density (power heuristic in solid angle at x), as plain
+    // NEE is weighed against BSDF sampling; any other chain through a delta vertex keeps weight 1.
+    int via_mirror = -1;
+    Vec3 via_x;
+    float via_pdf_sa = 0;
+    bool origin_prev = false;  // the vertex that spawned the current edge ran the connector
+    Vec3 origin_p;
+    float origin_pdf_sa = 0;
 
     // k is the number of edges of the path so far, counting the one being traced.
     for (int k = 1;; ++k) {
@@ -60,6 +91,9 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
                 Rgb le = environment_le(el, d);
                 float w = prev_delta || !nee ? 1.f
                                              : power_heuristic(prev_pdf_sa, sel.pmf(size_t(env)) * environment_pdf_li_sa(el, d));
+                if (via_mirror >= 0)
+                    w = power_heuristic(via_pdf_sa, mirror_environment_pdf_sa(scene_, mirrors_->list[size_t(via_mirror)],
+                                                                             via_x, size_t(env), d));
                 L += beta * le * w;
             }
             break;
@@ -74,6 +108,9 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
                 if (!prev_delta && nee) {
                     float pdf_light_sa = sel.pmf(size_t(shape.light)) * light_pdf_li_sa(scene_, al, prev_p, hit);
                     w = power_heuristic(prev_pdf_sa, pdf_light_sa);
+                } else if (via_mirror >= 0) {
+                    w = power_heuristic(via_pdf_sa, mirror_light_pdf_sa(scene_, mirrors_->list[size_t(via_mirror)], via_x,
+                                                                        size_t(shape.light), hit));
                 }
                 L += beta * le * w;
             }
@@ -88,10 +125,14 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
         if (wo_local.z == 0) break;
 
         // Vertex k of the path (k edges before it) draws from its own block of dimensions.
-        if (nee && bsdf_has_nondelta(bsdf)) {
+        const bool nondelta = bsdf_has_nondelta(bsdf);
+        if (nee && nondelta) {
             sampler.start_dimension(dims::camera_walk(k, dims::kDirect));
             L += beta * sample_direct(hit, shading, wo_local, bsdf, sampler, stats);
         }
+        // The connector's chain has two more edges: x -> mirror -> light.
+        const bool connector = mirrors_ && nondelta && k + 2 <= max_depth;
+        if (connector) L += beta * sample_direct_via_mirrors(hit, shading, wo_local, bsdf, k, sampler, stats);
 
         sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
         float uc = sampler.next_1d();
@@ -101,6 +142,19 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
         Vec3 wi = shading.to_world(bs->wi);
         if (!consistent_side(wi, hit.ng, bs->wi.z)) break;
         beta *= bs->weight;
+        // A delta reflection off a connector mirror right after a connector vertex: the next
+        // light hit is a chain the connector could have sampled (see via_mirror above).
+        const int mi = mirrors_ ? mirrors_->index(hit.shape) : -1;
+        if (bs->is_delta() && mi >= 0 && origin_prev) {
+            via_mirror = mi;
+            via_x = origin_p;
+            via_pdf_sa = origin_pdf_sa;
+        } else {
+            via_mirror = -1;
+        }
+        origin_prev = connector && !bs->is_delta();
+        origin_p = hit.p;
+        origin_pdf_sa = bs->pdf_sa;
         prev_delta = bs->is_delta();
         prev_pdf_sa = bs->pdf_sa;
         prev_p = hit.p;

@@ -4,11 +4,14 @@
 // power heuristic in solid-angle measure. max_depth counts edges (Veach's k): 1 = emitters seen
 // directly, 2 = direct lighting.
 #include <cstdint>
+#include <memory>
 
 #include "sampling/sampler.h"
 #include "scene/scene.h"
 
 namespace omega {
+
+struct PlanarMirrors;  // pathspace/mirror_connector.h
 
 // Unbounded depth still needs a hard stop for scenes that never absorb (a closed perfect mirror
 // box): paths end after this many edges (the BDPT engine's subpaths after as many vertices).
@@ -18,6 +21,9 @@ struct PathTracerSettings {
     int max_depth = -1;  // -1: unbounded, Russian roulette ends paths (at most kMaxUnboundedDepth edges)
     int rr_depth = 5;    // first edge count at which Russian roulette may stop a path
     bool light_sampling = true;  // false: BSDF sampling only (IntegratorDesc::light_sampling)
+    // Next-event estimation through planar mirrors (pathspace/mirror_connector.h). Off only for
+    // tests that check the connector's MIS against the plain path tracer.
+    bool mirror_connector = true;
 };
 
 // Per-thread counters; each worker owns one (cache-line aligned by its container).
@@ -29,7 +35,7 @@ struct TracerStats {
 
 class PathTracer {
 public:
-    PathTracer(const Scene& scene, const PathTracerSettings& settings) : scene_(scene), settings_(settings) {}
+    PathTracer(const Scene& scene, const PathTracerSettings& settings);
     // Radiance along `ray`. Called concurrently from render threads; touches only `sampler` and
     // `stats`. Bounce k draws from the camera-walk block of vertex k (see sampling/sampler.h).
     Rgb radiance(Ray ray, Sampler& sampler, TracerStats& stats) const;
@@ -37,8 +43,14 @@ public:
 private:
     Rgb sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,
                       Sampler& sampler, TracerStats& stats) const;
+    // Next-event estimation through each planar mirror from camera-walk vertex k (k edges before it).
+    Rgb sample_direct_via_mirrors(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,
+                                  int k, Sampler& sampler, TracerStats& stats) const;
     const Scene& scene_;
     PathTracerSettings settings_;
+    // The scene's planar mirrors (pathspace/mirror_connector.h): next-event estimation also
+    // samples lights through each of them; empty when the scene has none, or without light sampling.
+    std::shared_ptr<const PlanarMirrors> mirrors_;
 };
 
 }  // namespace omega

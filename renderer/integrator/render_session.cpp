@@ -24,7 +24,9 @@ constexpr long long kMaxPassSpp = 256;
 constexpr double kPassSeconds = 1.0;
 constexpr long long kMinSppForErrorHalt = 16;  // variance estimates below this are too noisy to stop on
 
-PathTracerSettings tracer_settings(const IntegratorDesc& d) { return {d.max_depth, d.rr_depth, d.light_sampling}; }
+PathTracerSettings tracer_settings(const IntegratorDesc& d) {
+    return {d.max_depth, d.rr_depth, d.light_sampling, d.mirror_connector};
+}
 
 }  // namespace
 

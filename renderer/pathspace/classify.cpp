@@ -1,5 +1,7 @@
 #include "pathspace/classify.h"
 
+#include "pathspace/mirror_connector.h"
+
 #include <algorithm>
 #include <fmt/format.h>
 
@@ -27,7 +29,7 @@ std::string PathClass::regex() const {
     r += light.direction;
     for (char c : surfaces) {
         r += ' ';
-        r += c;
+        r += c == 'M' ? 'S' : c;
     }
     r += ' ';
     r += sensor.direction;
@@ -49,9 +51,29 @@ bool locally_sampleable(const PathClass& c) {
     return all.find("DD") != std::string::npos;
 }
 
+namespace {
+// The class with every M read as S: what strategies without the connector see.
+PathClass without_mirrors(PathClass c) {
+    std::replace(c.surfaces.begin(), c.surfaces.end(), 'M', 'S');
+    return c;
+}
+}  // namespace
+
 bool sampleable_by(const PathClass& c, IntegratorType integrator) {
     const std::string& v = c.surfaces;
     const size_t n = v.size();
+    if (v.find('M') != std::string::npos) {
+        if (sampleable_by(without_mirrors(c), integrator)) return true;
+        // The planar-mirror connector (pathspace/mirror_connector.h), one M between the two ends
+        // it joins. Path tracer: next-event estimation from a D vertex through M to the light.
+        if (integrator == IntegratorType::Path) return n >= 2 && v[0] == 'M' && v[1] == 'D';
+        // Light tracer, when the lens cannot be hit: a D vertex, or the light endpoint itself,
+        // through M to the sensor.
+        const bool lens_hittable = c.sensor.direction == 'D' && c.sensor.position == 'D';
+        if (integrator == IntegratorType::Light && !lens_hittable && v[n - 1] == 'M')
+            return n >= 2 ? v[n - 2] == 'D' : (c.light.direction == 'D' && c.sensor.direction == 'D');
+        return false;  // bdpt: not yet in its MIS routine
+    }
     const bool hittable = c.light.position == 'D' && c.light.direction == 'D';
     // s = 0: the sensor subpath hits the light.
     const bool s0 = hittable;
@@ -99,7 +121,8 @@ const char* integrator_words(IntegratorType t) {
     return "?";
 }
 
-std::string describe(const PathClass& c, const std::string& light, const std::string& sensor) {
+std::string describe(const PathClass& mc, const std::string& light, const std::string& sensor) {
+    const PathClass c = without_mirrors(mc);
     const std::string& v = c.surfaces;
     if (v.empty()) return light + " seen directly by " + sensor;
     const bool caustic = v[0] == 'S' && v.find('D') != std::string::npos;
@@ -129,11 +152,12 @@ SceneClasses classify_scene(const Scene& scene) {
     }
     sc.sensor = classify_sensor(scene.sensor());
     sc.sensor_name = sensor_words(scene.sensor());
-    // Only materials on some shape are built, so these are the BSDFs the scene can scatter with.
-    for (const Bsdf& b : scene.materials()) {
-        uint8_t lobes = bsdf_lobes(b);
+    // Per shape: a delta lobe on a connector mirror is M, anywhere else S.
+    const PlanarMirrors mirrors = find_planar_mirrors(scene);
+    for (uint32_t i = 0; i < scene.shapes().size(); ++i) {
+        uint8_t lobes = bsdf_lobes(scene.materials()[scene.shapes()[i].material]);
         if (lobes & (kLobeDiffuse | kLobeGlossy)) sc.has_diffuse = true;
-        if (lobes & kLobeDelta) sc.has_specular = true;
+        if (lobes & kLobeDelta) (mirrors.index(i) >= 0 ? sc.has_planar_mirror : sc.has_specular) = true;
     }
     return sc;
 }
@@ -142,6 +166,7 @@ std::vector<std::string> path_space_warnings(const Scene& scene, IntegratorType 
     SceneClasses sc = classify_scene(scene);
     std::string symbols;
     if (sc.has_specular) symbols += 'S';
+    if (sc.has_planar_mirror) symbols += 'M';
     if (sc.has_diffuse) symbols += 'D';
     std::vector<std::string> out;
     // Enumerate surface sequences up to 3 bounces, shortest first, and report the unsampleable ones.
@@ -165,14 +190,23 @@ std::vector<std::string> path_space_warnings(const Scene& scene, IntegratorType 
             std::string what = describe(c, sc.light_names[li], sc.sensor_name);
             if (std::find(reported.begin(), reported.end(), what) != reported.end()) continue;
             reported.push_back(what);
-            if (!any)
+            // Which other integrator can, through a connector where no local strategy does.
+            std::string other;
+            for (IntegratorType t : {IntegratorType::Bdpt, IntegratorType::Path, IntegratorType::Light})
+                if (t != integrator && other.empty() && sampleable_by(c, t)) other = integrator_words(t);
+            if (!any && !other.empty())
+                out.push_back(fmt::format("{} ({}): missing, no local path sampling strategy can produce these paths "
+                                          "(Veach, Theorem 8.3: no DD edge), and {} has no connector for them; {} "
+                                          "reaches them through its planar-mirror connector",
+                                          c.regex(), what, integrator_words(integrator), other));
+            else if (!any)
                 out.push_back(fmt::format("{} ({}): missing, no local path sampling strategy can produce these paths "
                                           "(Veach, Theorem 8.3: no DD edge)",
                                           c.regex(), what));
-            else if (sampleable_by(c, IntegratorType::Bdpt))
-                out.push_back(fmt::format("{} ({}): missing, {} cannot sample these paths (bdpt can)", c.regex(), what,
-                                          integrator_words(integrator)));
-            else  // cannot happen: bdpt runs every local strategy, t = 0 included
+            else if (!other.empty())
+                out.push_back(fmt::format("{} ({}): missing, {} cannot sample these paths ({} can)", c.regex(), what,
+                                          integrator_words(integrator), other == "bidirectional path tracing" ? "bdpt" : other));
+            else  // a connector class that only another connector could reach
                 out.push_back(fmt::format("{} ({}): missing, {} cannot sample these paths", c.regex(), what,
                                           integrator_words(integrator)));
             if (out.size() >= 6) return out;

@@ -19,7 +19,9 @@ struct EndpointClass {
 EndpointClass classify_light(const Light& light);
 EndpointClass classify_sensor(const Sensor& sensor);
 
-// A path class: an emitter, a sequence of surface scattering symbols, a sensor.
+// A path class: an emitter, a sequence of surface scattering symbols, a sensor. Surface symbols
+// are S, D, and M: an S vertex on one of the planar mirrors the connector reflects in
+// (pathspace/mirror_connector.h). M is S to Theorem 8.3 and in every printed expression.
 struct PathClass {
     EndpointClass light;
     std::string surfaces;  // e.g. "SDS"
@@ -33,8 +35,10 @@ struct PathClass {
 bool locally_sampleable(const PathClass& c);
 
 // Whether this renderer's strategies in `set` can sample the class. Beyond Theorem 8.3 the
-// renderer has two connectors of its own: next-event estimation reaches directional lights by
-// projection, and light tracing reaches the orthographic sensor by projection.
+// renderer has connectors of its own: next-event estimation reaches directional lights by
+// projection, light tracing reaches the orthographic sensor by projection, and the planar-mirror
+// connector joins D to a light (path tracer) or a light-side D or light endpoint to a pinhole or
+// orthographic sensor (light tracer) through one M vertex.
 bool sampleable_by(const PathClass& c, IntegratorType integrator);
 
 // What a scene can produce: its emitter classes, sensor class and surface symbols.
@@ -43,7 +47,8 @@ struct SceneClasses {
     std::vector<std::string> light_names;
     EndpointClass sensor;
     std::string sensor_name;
-    bool has_diffuse = false, has_specular = false;  // some BSDF has a D / S component
+    bool has_diffuse = false, has_specular = false;  // some shape's BSDF has a D / S component (S: not a planar mirror)
+    bool has_planar_mirror = false;                  // some shape is a connector mirror (M)
     bool any_light_hittable = false;                 // some light is L D D (s = 0 can contribute)
 };
 SceneClasses classify_scene(const Scene& scene);

@@ -31,6 +31,8 @@ double light_origin_density(const Scene& scene, const PathVertex& v0) {
 
 }  // namespace
 
+double light_endpoint_density(const Scene& scene, const PathVertex& v0) { return light_origin_density(scene, v0); }
+
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
                             const PathVertex* sampled_sensor) {

@@ -43,6 +43,10 @@ std::optional<Connection> connect_lens(const Scene& scene, const std::vector<Pat
 // standing in for light[0] (s = 1) and sampled_sensor for camera[0] (t = 1) or for the lens vertex
 // ending the light side (t = 0; without it, light[s-1] is the lens) when the connection
 // sampled that endpoint afresh.
+// Density of a light endpoint v0 from the light side: selection pmf x its position density (area
+// measure), or x its direction density for a light at infinity; the pmf alone for a point light.
+double light_endpoint_density(const Scene& scene, const PathVertex& v0);
+
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
                             const PathVertex* sampled_sensor);

@@ -48,6 +48,11 @@ inline constexpr uint32_t kEmit = kCameraWalk + kBlock * kMaxDepth;  // 1D light
 inline constexpr uint32_t kLightWalk = kEmit + kBlock;
 inline constexpr uint32_t kConnectLight = kLightWalk + kBlock * kMaxDepth;  // s = 1: 3 dims per t
 inline constexpr uint32_t kConnectSensor = kConnectLight + 4 * kMaxDepth;   // t = 1: 2 dims per s
+// The planar-mirror connector (pathspace/mirror_connector.h), per vertex and mirror: a light
+// sample through the mirror (3 dims), a lens sample through it (2 dims).
+inline constexpr uint32_t kMirrorSlots = 4;
+inline constexpr uint32_t kMirrorLight = kConnectSensor + 2 * kMaxDepth;
+inline constexpr uint32_t kMirrorSensor = kMirrorLight + 3 * kMirrorSlots * kMaxDepth;
 
 // `vertex` counts vertices of the walk before this one's scattering (the path tracer's edges k).
 constexpr uint32_t camera_walk(int vertex, uint32_t slot) {
@@ -60,6 +65,14 @@ constexpr uint32_t light_walk(int vertex, uint32_t slot) {
 constexpr uint32_t connect_light(int t) { return t >= 0 && t < kMaxDepth ? kConnectLight + 4 * uint32_t(t) : kBeyond; }
 // Strategy (s, 1): the lens sample seen from light vertex s - 1.
 constexpr uint32_t connect_sensor(int s) { return s >= 0 && s < kMaxDepth ? kConnectSensor + 2 * uint32_t(s) : kBeyond; }
+// Next-event estimation through mirror `m` from camera-walk vertex `vertex`.
+constexpr uint32_t mirror_light(int vertex, int m) {
+    return vertex >= 0 && vertex < kMaxDepth ? kMirrorLight + 3 * (kMirrorSlots * uint32_t(vertex) + uint32_t(m)) : kBeyond;
+}
+// Strategy (s, 1) through mirror `m`.
+constexpr uint32_t mirror_sensor(int s, int m) {
+    return s >= 0 && s < kMaxDepth ? kMirrorSensor + 2 * (kMirrorSlots * uint32_t(s) + uint32_t(m)) : kBeyond;
+}
 
 }  // namespace dims
 

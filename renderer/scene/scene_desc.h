@@ -47,6 +47,9 @@ struct IntegratorDesc {
     // per-sample variance then has closed forms (tests/stability/furnace_variance_test.cpp).
     // Other integrators reject false.
     bool light_sampling = true;
+    // Tests only (no scene-file key): false leaves out the planar-mirror connector
+    // (pathspace/mirror_connector.h), to check its MIS against the plain strategies.
+    bool mirror_connector = true;
     // Scene key `sampler: {type: sobol | independent}` (top level, beside `integrator`); it lives
     // here so that every place that hands an IntegratorDesc to a render carries it along.
     SamplerType sampler = SamplerType::Sobol;
