@@ -15,14 +15,16 @@ BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
     // towards the lens, so it goes one vertex further; longer connections are skipped by k.
     use_t0_ = plan_.t0 && set_.allows(2, 0);
     if (use_t0_ && md < kMaxUnboundedDepth) light_limits_.max_vertices = md + 1;
-    // Light tracing through planar mirrors (pathspace/mirror_connector.h). With a pinhole or an
-    // orthographic sensor a chain y -> mirror -> camera has no other strategy in the light tracer
-    // (the mirror is delta, the lens cannot be hit), so the connector's weight is 1. BDPT and a
-    // hittable lens would need it inside the MIS routine, which is not done: there the chain
-    // stays what it was (sampled by bdpt's other strategies where they can, else missing).
-    if (desc.type == IntegratorType::Light && desc.mirror_connector && !scene.sensor().lens_hittable()) {
+    // The planar-mirror connector (pathspace/mirror_connector.h): a strategy of its own in the
+    // MIS routine, for every (s, t) that StrategySet::allows_connector says (all of them in
+    // bdpt, t = 1 in the light tracer, s = 1 in the general path engine).
+    if (desc.mirror_connector) {
         auto m = std::make_shared<PlanarMirrors>(find_planar_mirrors(scene));
-        if (!m->empty()) mirrors_ = std::move(m);
+        if (!m->empty()) {
+            mirrors_ = std::move(m);
+            set_.mirrors = mirrors_.get();
+            set_.lens_hittable = scene.sensor().lens_hittable();
+        }
     }
 }
 
@@ -72,14 +74,24 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             else L += weighted;
         }
     }
-    // The chain adds one edge to strategy (s, 1): k = s + 1.
-    if (mirrors_)
-        for (int s = 1; s <= n_light && (max_depth_ < 0 || s + 1 <= max_depth_); ++s)
-            for (size_t i = 0; i < mirrors_->list.size(); ++i) {
-                sampler.start_dimension(dims::mirror_sensor(s, int(i)));
-                if (auto c = connect_sensor_via_mirror(scene_, mirrors_->list[i], lit, s, sampler, stats))
-                    splats.push_back({c->film, c->L});
+    // Connections through a planar mirror: the mirror vertex adds an edge, k = s + t.
+    if (mirrors_) {
+        const int t_top = std::max(n_cam, 1);
+        for (int t = 1; t <= t_top; ++t)
+            for (int s = 1; s <= std::max(n_light, 1); ++s) {
+                if (max_depth_ >= 0 && s + t > max_depth_) continue;
+                if (!set_.allows_connector(s, t)) continue;
+                if ((t >= 2 && t > n_cam) || ((s >= 2 || t == 1) && s > n_light)) continue;
+                for (size_t i = 0; i < mirrors_->list.size(); ++i) {
+                    auto c = connect_via_mirror(scene_, int(i), lit, cam, s, t, set_, sampler, stats, scratch.connect);
+                    if (!c) continue;
+                    Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
+                    Rgb weighted = unweighted * float(c->weight);
+                    if (c->splat) splats.push_back({c->film, weighted});
+                    else L += weighted;
+                }
             }
+    }
     return L;
 }
 

@@ -51,7 +51,7 @@ private:
     int max_depth_;
     bool use_t0_ = false;  // light subpaths that hit the lens are a strategy here
     WalkLimits camera_limits_, light_limits_;
-    std::shared_ptr<const PlanarMirrors> mirrors_;  // light tracing only (see the constructor)
+    std::shared_ptr<const PlanarMirrors> mirrors_;  // the connector's mirrors (set_.mirrors points here); null if none
 };
 
 }  // namespace omega

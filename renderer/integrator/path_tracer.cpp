@@ -51,7 +51,7 @@ Rgb PathTracer::sample_direct_via_mirrors(const SurfaceHit& hit, const Frame& sh
     Rgb L(0.f);
     for (size_t i = 0; i < mirrors_->list.size(); ++i) {
         sampler.start_dimension(dims::mirror_light(k, int(i)));
-        auto ms = sample_light_via_mirror(scene_, mirrors_->list[i], hit, shading, wo_local, bsdf, sampler, stats);
+        auto ms = sample_light_chain(scene_, mirrors_->list[i], hit, shading, wo_local, bsdf, sampler, stats);
         if (!ms) continue;
         const float w = ms->delta_light ? 1.f : power_heuristic(ms->pdf_light_sa, ms->pdf_bsdf_sa);
         L += ms->L * w;

@@ -64,15 +64,25 @@ bool sampleable_by(const PathClass& c, IntegratorType integrator) {
     const size_t n = v.size();
     if (v.find('M') != std::string::npos) {
         if (sampleable_by(without_mirrors(c), integrator)) return true;
-        // The planar-mirror connector (pathspace/mirror_connector.h), one M between the two ends
-        // it joins. Path tracer: next-event estimation from a D vertex through M to the light.
+        // The planar-mirror connector (pathspace/mirror_connector.h) joins the two vertices
+        // around one M: a D surface, the light (sampled from the image: any light) or the sensor
+        // (sampled from the image: any sensor); the light endpoint itself needs a position and a
+        // direction density to be joined to the sensor (n = 1).
+        const bool light_end_joinable = c.light.direction == 'D';
+        auto joins = [&](size_t j) {
+            if (v[j] != 'M') return false;
+            if (n == 1) return light_end_joinable;
+            return (j == 0 || v[j - 1] == 'D') && (j == n - 1 || v[j + 1] == 'D');
+        };
+        // Path tracer: next-event estimation from a D vertex through M to the light (s = 1).
         if (integrator == IntegratorType::Path) return n >= 2 && v[0] == 'M' && v[1] == 'D';
-        // Light tracer, when the lens cannot be hit: a D vertex, or the light endpoint itself,
-        // through M to the sensor.
+        // Light tracer, when the lens cannot be hit: through the last M to the sensor (t = 1).
         const bool lens_hittable = c.sensor.direction == 'D' && c.sensor.position == 'D';
-        if (integrator == IntegratorType::Light && !lens_hittable && v[n - 1] == 'M')
-            return n >= 2 ? v[n - 2] == 'D' : (c.light.direction == 'D' && c.sensor.direction == 'D');
-        return false;  // bdpt: not yet in its MIS routine
+        if (integrator == IntegratorType::Light) return !lens_hittable && joins(n - 1);
+        // bdpt: the connector at any (s, t).
+        for (size_t j = 0; j < n; ++j)
+            if (joins(j)) return true;
+        return false;
     }
     const bool hittable = c.light.position == 'D' && c.light.direction == 'D';
     // s = 0: the sensor subpath hits the light.

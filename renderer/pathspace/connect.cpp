@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "light/light_emission.h"
+#include "pathspace/mirror_connector.h"
 #include "scene/spawn.h"
 
 namespace omega {
@@ -35,15 +36,15 @@ double light_endpoint_density(const Scene& scene, const PathVertex& v0) { return
 
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
-                            const PathVertex* sampled_sensor) {
+                            const PathVertex* sampled_sensor, const PlanarMirrors* mirrors) {
     FullPathPdfs fp;
-    full_path_pdfs_into(scene, light, camera, s, t, sampled_light, sampled_sensor, fp);
+    full_path_pdfs_into(scene, light, camera, s, t, sampled_light, sampled_sensor, fp, mirrors);
     return fp;
 }
 
 void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& light,
                          const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
-                         const PathVertex* sampled_sensor, FullPathPdfs& fp) {
+                         const PathVertex* sampled_sensor, FullPathPdfs& fp, const PlanarMirrors* mirrors) {
     const int n = s + t;
     fp.p_light.resize(size_t(n));
     fp.p_sensor.resize(size_t(n));
@@ -127,6 +128,12 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
     }
     // A light that cannot be hit has no density from the sensor side.
     if (!fp.light_hittable) fp.p_sensor[0] = 0;
+    fp.connector.clear();
+    if (mirrors) {
+        std::vector<const PathVertex*> vs(static_cast<size_t>(n));
+        for (int i = 0; i < n; ++i) vs[size_t(i)] = &V(i);
+        mirror_connector_factors(*mirrors, vs, fp);
+    }
 }
 
 std::optional<Connection> connect_lens(const Scene& scene, const std::vector<PathVertex>& light,
@@ -138,7 +145,7 @@ std::optional<Connection> connect_lens(const Scene& scene, const std::vector<Pat
     c.L = lc.beta;  // times W_e, applied per pixel through `importance` like a t = 1 splat
     if (is_black(c.L)) return std::nullopt;
     FullPathPdfs& fp = cstats.table;
-    full_path_pdfs_into(scene, light, {}, s, 0, nullptr, &lc.lens, fp);
+    full_path_pdfs_into(scene, light, {}, s, 0, nullptr, &lc.lens, fp, set.mirrors);
     double w = mis_weight(fp, s, set);
     if (w < 0) {
         ++cstats.bad_weights;
@@ -250,7 +257,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
     if (is_black(c.L)) return std::nullopt;
 
     FullPathPdfs& fp = cstats.table;
-    full_path_pdfs_into(scene, light, camera, s, t, sampled_light, sampled_sensor, fp);
+    full_path_pdfs_into(scene, light, camera, s, t, sampled_light, sampled_sensor, fp, set.mirrors);
     double w = mis_weight(fp, s, set);
     if (w < 0) {
         ++cstats.bad_weights;

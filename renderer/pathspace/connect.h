@@ -22,6 +22,7 @@ struct Connection {
 struct ConnectStats {
     uint64_t bad_weights = 0;  // non-finite MIS weights: counted as errors, contribution dropped
     FullPathPdfs table;        // reused: no allocation per connection once warmed up
+    std::vector<PathVertex> mirror_camera;  // the planar-mirror connector's camera side with the mirror vertex
 };
 
 // Strategy (s, t) for the given subpaths. Tests may ask for the full path v_0..v_k (light end
@@ -49,9 +50,11 @@ double light_endpoint_density(const Scene& scene, const PathVertex& v0);
 
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
-                            const PathVertex* sampled_sensor);
+                            const PathVertex* sampled_sensor, const PlanarMirrors* mirrors = nullptr);
+// With `mirrors`, fp.connector is filled for every vertex the planar-mirror connector could
+// join across (see mis.h); without, it stays empty.
 void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& light,
                          const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
-                         const PathVertex* sampled_sensor, FullPathPdfs& fp);
+                         const PathVertex* sampled_sensor, FullPathPdfs& fp, const PlanarMirrors* mirrors = nullptr);
 
 }  // namespace omega

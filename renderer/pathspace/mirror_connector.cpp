@@ -98,9 +98,9 @@ std::optional<MirrorBounce> bounce_off(const Scene& scene, const PlanarMirror& m
     return b;
 }
 
-std::optional<MirrorLightSample> sample_light_via_mirror(const Scene& scene, const PlanarMirror& mirror,
-                                                         const SurfaceHit& x, const Frame& shading, const Vec3& wo_local,
-                                                         const Bsdf& bsdf, Sampler& sampler, TracerStats& stats) {
+std::optional<LightChain> sample_light_chain(const Scene& scene, const PlanarMirror& mirror, const SurfaceHit& x,
+                                             const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf, Sampler& sampler,
+                                             TracerStats& stats) {
     const auto& sel = scene.light_selection();
     if (sel.empty() || !mirror.usable_from(x.p)) return std::nullopt;
     const float u_sel = sampler.next_1d();
@@ -133,11 +133,21 @@ std::optional<MirrorLightSample> sample_light_via_mirror(const Scene& scene, con
     ++stats.rays;
     const Ray shadow = ls->infinite ? spawn_ray(b->hit, ls->wi) : spawn_ray_to(b->hit, ls->p, ls->p_error, ls->n);
     if (scene.occluded(shadow)) return std::nullopt;
-    MirrorLightSample out;
+    LightChain out;
     out.pdf_light_sa = pmf * ls->pdf_sa;
     out.delta_light = ls->delta;
     out.pdf_bsdf_sa = bsdf_pdf_sa(bsdf, wo_local, wi_local, TransportMode::Radiance);
     out.L = f * b->weight * ls->Li / out.pdf_light_sa;
+    out.mirror = b->hit;
+    PathVertex& v = out.light_vertex;
+    v.kind = VertexKind::Light;
+    v.light = int(li);
+    v.infinite = ls->infinite;
+    v.dir = -ls->wi;
+    v.hit.p = ls->p;
+    v.hit.planar = false;
+    v.hit.ng = ls->n;
+    v.hit.p_error = ls->p_error;
     return out;
 }
 
@@ -153,51 +163,184 @@ float mirror_environment_pdf_sa(const Scene& scene, const PlanarMirror& mirror, 
     return scene.light_selection().pmf(light) * environment_pdf_li_sa(scene.lights()[light], d);
 }
 
-std::optional<MirrorSensorSplat> connect_sensor_via_mirror(const Scene& scene, const PlanarMirror& mirror,
-                                                           const std::vector<PathVertex>& light, int s, Sampler& sampler,
-                                                           TracerStats& stats) {
-    const PathVertex& y = light[size_t(s - 1)];
-    if (!y.connectible() || y.infinite || !mirror.usable_from(y.p())) return std::nullopt;
-    const Sensor& sensor = scene.sensor();
-    const Vec3 y_img = mirror.image(y.p());
-    auto sc = sensor.sample_wi(y_img, sampler.next_2d());
-    if (!sc) return std::nullopt;
-    if (!(mirror.side(sc->p) * mirror.side(y.p()) > 0)) return std::nullopt;  // the camera is behind the mirror
-    auto m = plane_crossing(mirror, y_img, sc->p);
-    if (!m) return std::nullopt;
-    const Vec3 to_m = *m - y.p();
-    const Vec3 w = to_m / length(to_m);
-    Rgb L;
-    if (y.kind == VertexKind::Light) {
-        const Rgb le = light_emission_towards(scene.lights()[size_t(y.light)], y.hit, w);
-        L = le * float(1.0 / light_endpoint_density(scene, y));
-    } else {
-        L = y.beta * vertex_f(y, w, TransportMode::Importance) * absdot(w, y.hit.ns);
+void mirror_connector_factors(const PlanarMirrors& mirrors, const std::vector<const PathVertex*>& v, FullPathPdfs& fp) {
+    const int n = int(v.size());
+    for (int j = 1; j + 1 < n; ++j) {
+        const PathVertex& m = *v[size_t(j)];
+        if (!fp.delta[size_t(j)] || m.kind != VertexKind::Surface || mirrors.index(m.hit.shape) < 0) continue;
+        if (fp.delta[size_t(j - 1)] || fp.delta[size_t(j + 1)]) continue;
+        const PathVertex &a = *v[size_t(j - 1)], &b = *v[size_t(j + 1)];
+        if (b.infinite) continue;
+        const Vec3 mn = mirrors.list[size_t(mirrors.index(m.hit.shape))].n;
+        const Vec3 wb = b.p() - m.p();
+        const double d1 = length(wb);
+        const double cos_m = std::abs(dot(mn, wb)) / d1;
+        double J;
+        if (a.infinite) {
+            J = b.is_on_surface() ? std::abs(dot(b.hit.ng, wb)) / d1 / cos_m : 1.0;
+        } else {
+            const Vec3 wa = a.p() - m.p();
+            const double d0 = length(wa), R2 = (d0 + d1) * (d0 + d1);
+            if (a.is_on_surface()) J = std::abs(dot(a.hit.ng, wa)) / d0 * d1 * d1 / (cos_m * R2);
+            else if (b.is_on_surface()) J = std::abs(dot(b.hit.ng, wb)) / d1 * d0 * d0 / (cos_m * R2);
+            else J = 1.0;  // point light to pinhole: the connector is the only strategy
+        }
+        if (!(J > 0) || !std::isfinite(J)) continue;
+        if (fp.connector.empty()) fp.connector.assign(size_t(n), 0.0);
+        fp.connector[size_t(j)] = J;
     }
-    if (is_black(L)) return std::nullopt;
-    // A point light or a pinhole has no surface to spawn from: start on the point itself.
-    SurfaceHit from = y.hit;
-    std::optional<MirrorBounce> b;
-    if (is_black(y.hit.ng)) {
-        SurfaceHit hit;
+}
+
+namespace {
+
+// The mirror vertex of a connector path, as the camera side's next vertex after `from` (whose
+// density of generating it is pdf_fwd, area measure at the mirror).
+PathVertex mirror_vertex(const Scene& scene, const SurfaceHit& hit, double pdf_fwd) {
+    PathVertex mv;
+    mv.kind = VertexKind::Surface;
+    mv.delta = true;
+    mv.hit = hit;
+    mv.shading = Frame::from_normal(hit.ns);
+    mv.bsdf = &scene.materials()[scene.shapes()[hit.shape].material];
+    mv.pdf_fwd = pdf_fwd;
+    return mv;
+}
+
+}  // namespace
+
+std::optional<Connection> connect_via_mirror(const Scene& scene, int mi, const std::vector<PathVertex>& light,
+                                             const std::vector<PathVertex>& camera, int s, int t, const StrategySet& set,
+                                             Sampler& sampler, TracerStats& stats, ConnectStats& cstats,
+                                             std::vector<PathVertex>* full_path, FullPathPdfs* pdfs) {
+    if (!set.mirrors || !set.allows_connector(s, t)) return std::nullopt;
+    const PlanarMirror& mirror = set.mirrors->list[size_t(mi)];
+    Connection c;
+    PathVertex sampled;  // the light (s = 1) or sensor (t = 1) endpoint sampled through the mirror
+    const PathVertex* sampled_light = nullptr;
+    const PathVertex* sampled_sensor = nullptr;
+    SurfaceHit mhit;
+    Rgb R;
+    double m_pdf_fwd = 0;  // the camera side's density of the mirror vertex (area)
+    if (t == 1) {
+        // The lens sampled from the image of y = light[s-1]; the splat lands where the camera
+        // sees the mirror point.
+        const PathVertex& y = light[size_t(s - 1)];
+        if (!y.connectible() || y.infinite || !mirror.usable_from(y.p())) return std::nullopt;
+        const Sensor& sensor = scene.sensor();
+        sampler.start_dimension(dims::mirror_sensor(s, mi));
+        auto sc = sensor.sample_wi(mirror.image(y.p()), sampler.next_2d());
+        if (!sc || !(mirror.side(sc->p) * mirror.side(y.p()) > 0)) return std::nullopt;
+        auto m = plane_crossing(mirror, mirror.image(y.p()), sc->p);
+        if (!m) return std::nullopt;
+        const Vec3 to_m = *m - y.p();
+        const Vec3 w = to_m / length(to_m);
+        if (y.kind == VertexKind::Light) {
+            const Rgb le = light_emission_towards(scene.lights()[size_t(y.light)], y.hit, w);
+            c.L = le * float(1.0 / light_endpoint_density(scene, y));
+        } else {
+            c.L = y.beta * vertex_f(y, w, TransportMode::Importance) * absdot(w, y.hit.ns);
+        }
+        if (is_black(c.L)) return std::nullopt;
+        if (is_black(y.hit.ng)) {  // a point light: no surface to spawn from
+            ++stats.rays;
+            if (!scene.intersect(Ray{y.p(), w}, mhit) || mhit.shape != mirror.shape) return std::nullopt;
+            R = reflection_weight(scene, mhit, -w, TransportMode::Importance);
+            if (is_black(R)) return std::nullopt;
+        } else {
+            auto b = bounce_off(scene, mirror, y.hit, *m, stats);
+            if (!b) return std::nullopt;
+            mhit = b->hit;
+            R = b->weight;
+        }
         ++stats.rays;
-        Ray r{y.p(), w};
-        if (!scene.intersect(r, hit) || hit.shape != mirror.shape) return std::nullopt;
-        const Rgb R = reflection_weight(scene, hit, -w, TransportMode::Importance);
-        if (is_black(R)) return std::nullopt;
-        b = MirrorBounce{hit, R};
+        if (scene.occluded(spawn_ray_to(mhit, sc->p, Vec3(0.f), Vec3(0.f)))) return std::nullopt;
+        // The unfolded distance |y - m| + |m - c| is |y' - c|: sample_wi's own.
+        const double geo = sc->infinite_dir ? 1.0 : 1.0 / (double(sc->dist) * sc->dist);
+        c.L = c.L * R * float(geo);
+        c.splat = true;
+        c.film = sc->film;
+        c.importance = sc->importance;
+        sampled = sensor_vertex(scene, sc->p);
+        sampled.pdf_fwd = sensor.delta_direction() ? 1.0 : sensor.pdf_we(sc->p, -sc->wi).pos;
+        sampled_sensor = &sampled;
+        PathVertex mv = mirror_vertex(scene, mhit, 0);
+        m_pdf_fwd = sensor_density_at(scene, sampled, mv);
+    } else if (s == 1) {
+        // Next-event estimation from z = camera[t-1] through the mirror.
+        const PathVertex& z = camera[size_t(t - 1)];
+        if (!z.connectible() || z.kind != VertexKind::Surface) return std::nullopt;
+        Bsdf textured;
+        const Bsdf& bsdf = resolve_bsdf(*z.bsdf, z.hit.uv, textured);
+        sampler.start_dimension(dims::mirror_light(t - 1, mi));
+        auto ls = sample_light_chain(scene, mirror, z.hit, z.shading, z.shading.to_local(z.wo), bsdf, sampler, stats);
+        if (!ls) return std::nullopt;
+        c.L = z.beta * ls->L;
+        mhit = ls->mirror;
+        sampled = ls->light_vertex;
+        sampled_light = &sampled;
+        PathVertex mv = mirror_vertex(scene, mhit, 0);
+        m_pdf_fwd = to_area_density(z, vertex_pdf_sa(z, z.wo, direction(z, mv)), mv);
     } else {
-        b = bounce_off(scene, mirror, from, *m, stats);
+        // Both ends given: the reflection point lies where y meets z's image.
+        const PathVertex& y = light[size_t(s - 1)];
+        const PathVertex& z = camera[size_t(t - 1)];
+        if (!y.connectible() || !z.connectible() || y.kind != VertexKind::Surface || z.kind != VertexKind::Surface)
+            return std::nullopt;
+        if (!mirror.usable_from(y.p()) || !mirror.usable_from(z.p())) return std::nullopt;
+        const Vec3 z_img = mirror.image(z.p());
+        auto m = plane_crossing(mirror, y.p(), z_img);
+        if (!m) return std::nullopt;
+        const Vec3 wy = normalize(*m - y.p()), wz = normalize(*m - z.p());
+        const Rgb fy = vertex_f(y, wy, TransportMode::Importance), fz = vertex_f(z, wz, TransportMode::Radiance);
+        if (is_black(fy) || is_black(fz)) return std::nullopt;
+        const float dist2 = length_sq(z_img - y.p());
+        c.L = y.beta * fy * fz * z.beta * (absdot(wy, y.hit.ns) * absdot(wz, z.hit.ns) / dist2);
+        if (is_black(c.L)) return std::nullopt;
+        auto b = bounce_off(scene, mirror, y.hit, *m, stats);
         if (!b) return std::nullopt;
+        mhit = b->hit;
+        c.L *= b->weight;
+        ++stats.rays;
+        if (scene.occluded(spawn_ray_to(mhit, z.p(), z.hit.p_error, z.hit.ng))) return std::nullopt;
+        PathVertex mv = mirror_vertex(scene, mhit, 0);
+        m_pdf_fwd = to_area_density(z, vertex_pdf_sa(z, z.wo, direction(z, mv)), mv);
     }
-    ++stats.rays;
-    if (scene.occluded(spawn_ray_to(b->hit, sc->p, Vec3(0.f), Vec3(0.f)))) return std::nullopt;
-    // The unfolded distance |y - m| + |m - c| is |y' - c|: sample_wi's own.
-    const double geo = sc->infinite_dir ? 1.0 : 1.0 / (double(sc->dist) * sc->dist);
-    MirrorSensorSplat out;
-    out.L = L * b->weight * float(geo * sc->importance);
-    out.film = sc->film;
-    return out;
+    if (is_black(c.L)) return std::nullopt;
+
+    // The table of the full path light[0..s) + m + reverse(camera[0..t)): m joins the camera
+    // side (t + 1 vertices), so the connection edge is light[s-1] -- m.
+    auto& cam = cstats.mirror_camera;
+    if (t == 1) {
+        cam.assign(1, PathVertex{});  // stands for the sampled sensor
+    } else {
+        cam.assign(camera.begin(), camera.begin() + t);
+    }
+    cam.push_back(mirror_vertex(scene, mhit, m_pdf_fwd));
+    cam.back().wo = direction(cam.back(), t == 1 ? sampled : camera[size_t(t - 1)]);
+    FullPathPdfs& fp = cstats.table;
+    full_path_pdfs_into(scene, light, cam, s, t + 1, sampled_light, sampled_sensor, fp, set.mirrors);
+    // camera[t-2]'s density from the light side: generated at z = camera[t-1] having arrived
+    // from the mirror, not from the vertex z's own walk went on to.
+    if (t >= 2) {
+        const PathVertex& z = camera[size_t(t - 1)];
+        const PathVertex& z2 = camera[size_t(t - 2)];
+        const PathVertex& mv = cam.back();
+        fp.p_light[size_t(s + 2)] = to_area_density(z, vertex_pdf_sa(z, direction(z, mv), direction(z, z2)), z2);
+    }
+    const double w = mis_weight_connector(fp, s, set);
+    if (w < 0) {
+        ++cstats.bad_weights;
+        return std::nullopt;
+    }
+    c.weight = w;
+    if (full_path) {
+        full_path->clear();
+        for (int i = 0; i < s; ++i) full_path->push_back(i == 0 && sampled_light ? *sampled_light : light[size_t(i)]);
+        full_path->push_back(cam.back());
+        for (int j = t - 1; j >= 0; --j) full_path->push_back(j == 0 && sampled_sensor ? *sampled_sensor : camera[size_t(j)]);
+    }
+    if (pdfs) *pdfs = fp;
+    return c;
 }
 
 }  // namespace omega

@@ -16,9 +16,17 @@
 
 namespace omega {
 
+struct PlanarMirrors;  // pathspace/mirror_connector.h
+
 struct FullPathPdfs {
     std::vector<double> p_light, p_sensor;
     std::vector<uint8_t> delta;  // v_i is S: no strategy can connect an edge at it
+    // The planar-mirror connector (pathspace/mirror_connector.h) through v_j, a delta vertex on a
+    // connector mirror between two non-delta ones: connector[j] = J_j > 0, the Jacobian that puts
+    // the connector's density, prod_{i<j} p_light[i] prod_{i>j} p_sensor[i] / J_j, in the units
+    // of the others (mirror_connector_factors). 0 elsewhere; empty when the path has no such
+    // vertex (the common case costs nothing).
+    std::vector<double> connector;
     bool light_hittable = true;  // s = 0: the light can be hit by a sensor subpath (not delta in position or direction)
     bool light_at_infinity = false;  // v_0 is at infinity: s = 1, t = 1 cannot connect it to the sensor
     bool sensor_hittable = false;    // t = 0: light subpaths can hit the sensor (a lens of finite aperture)
@@ -28,6 +36,20 @@ struct FullPathPdfs {
 // Which (s, t) strategies an integrator uses. Strategies outside the set get no weight.
 struct StrategySet {
     IntegratorType type = IntegratorType::Bdpt;
+    // The planar-mirror connector through v_j is the strategy with s = j light vertices and
+    // t = k - j sensor vertices. The path tracer uses it for s = 1 (t >= 2), the light tracer for t = 1
+    // (not with a hittable lens, whose t = 0 strategy it would have to weigh), bdpt for all.
+    const PlanarMirrors* mirrors = nullptr;  // null: no connector (the scene has no planar mirror)
+    bool lens_hittable = false;
+    bool allows_connector(int s, int t) const {
+        if (!mirrors || s < 1 || t < 1) return false;
+        switch (type) {
+            case IntegratorType::Path: return s == 1 && t >= 2;
+            case IntegratorType::Light: return t == 1 && !lens_hittable;
+            case IntegratorType::Bdpt: return true;
+        }
+        return false;
+    }
     bool allows(int s, int t) const {
         switch (type) {
             case IntegratorType::Path: return s <= 1;
@@ -45,5 +67,7 @@ bool strategy_possible(const FullPathPdfs& path, int s);
 // Power-heuristic weight of strategy s. Returns a negative value if the computation is not
 // finite (an error the caller counts, never a silent NaN).
 double mis_weight(const FullPathPdfs& path, int s, const StrategySet& set);
+// The same for the connector through v_j (path.connector[j] > 0).
+double mis_weight_connector(const FullPathPdfs& path, int j, const StrategySet& set);
 
 }  // namespace omega

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "pathspace/connect.h"
+#include "pathspace/mirror_connector.h"
 #include "render_harness.h"
 
 namespace omega {
@@ -47,7 +48,7 @@ double weight_for_split(const Scene& scene, const std::vector<PathVertex>& v, in
         return i > 0 && i < n - 1 && x.delta && x.bsdf && bsdf_has_nondelta(*x.bsdf);
     };
     if (s >= 1 && t >= 1 && (mixed_delta(s - 1) || mixed_delta(s))) return -1.0;
-    FullPathPdfs fp = full_path_pdfs(scene, light, camera, s, t, nullptr, nullptr);
+    FullPathPdfs fp = full_path_pdfs(scene, light, camera, s, t, nullptr, nullptr, set.mirrors);
     *out = fp;
     if (!strategy_possible(fp, s) || !set.allows(s, t)) return 0.0;
     return mis_weight(fp, s, set);
@@ -55,6 +56,7 @@ double weight_for_split(const Scene& scene, const std::vector<PathVertex>& v, in
 
 struct Checked {
     int paths = 0;
+    int connector_paths = 0;  // sampled by the planar-mirror connector
     int t0_paths = 0;  // sampled by t = 0
     int max_vertices = 0;
 };
@@ -67,6 +69,9 @@ Checked check_scene(const SceneDesc& desc, int samples, int max_depth) {
     TracerStats stats;
     ConnectStats cstats;
     const Sensor& sensor = scene->sensor();
+    // Rectangles of smooth conductor are planar mirrors: the connector joins the strategies.
+    const PlanarMirrors mirrors = find_planar_mirrors(*scene);
+    const PlanarMirrors* mp = mirrors.empty() ? nullptr : &mirrors;
     for (int i = 0; i < samples; ++i) {
         Sampler rng(Rng::for_sample(99, 0, uint64_t(i)));  // independent: the checks need no layout
         Vec2 film{rng.next_1d() * float(sensor.width), rng.next_1d() * float(sensor.height)};
@@ -86,14 +91,22 @@ Checked check_scene(const SceneDesc& desc, int samples, int max_depth) {
                 if (!lc && s == 0 && cam[size_t(t - 1)].light < 0) continue;
                 std::vector<PathVertex> full;
                 FullPathPdfs fp;
-                for (IntegratorType type : {IntegratorType::Bdpt, IntegratorType::Path, IntegratorType::Light}) {
+                for (IntegratorType type : {IntegratorType::Bdpt, IntegratorType::Path, IntegratorType::Light})
+                  // via = -1: strategy (s, t); via = i: the connector through mirror i (k = s + t).
+                  for (int via = -1; via < (mp && !lc ? int(mp->list.size()) : 0); ++via) {
                     StrategySet set{type};
-                    if (!set.allows(s_eff, t)) continue;
+                    set.mirrors = mp;
+                    set.lens_hittable = sensor.lens_hittable();
+                    if (via < 0 ? !set.allows(s_eff, t) : !set.allows_connector(s, t) || s + t > max_depth) continue;
+                    if (via >= 0 && s == 1 && t == 1 && nl < 1) continue;
                     std::optional<Connection> c;
                     if (lc) {
                         c = connect_lens(*scene, lit, *lc, set, cstats, &fp);
                         full.assign(lit.begin(), lit.begin() + lc->s);
                         full.push_back(lc->lens);
+                    } else if (via >= 0) {
+                        c = connect_via_mirror(*scene, via, lit, cam, s, t, set, rng, stats, cstats, &full, &fp);
+                        if (c) ++out.connector_paths;
                     } else {
                         c = connect(*scene, lit, cam, s, t, set, rng, stats, cstats, &full, &fp);
                     }
@@ -107,8 +120,18 @@ Checked check_scene(const SceneDesc& desc, int samples, int max_depth) {
                         FullPathPdfs t2 = fp;
                         double w = weight_for_split(*scene, full, s2, set, &t2);
                         if (w < 0) continue;
-                        if (s2 == s_eff) {
+                        if (s2 == s_eff && via < 0) {
                             EXPECT_NEAR(w, c->weight, 1e-9);
+                        }
+                        // The connector's weight from this split's table, and its factors.
+                        if (via >= 0 && w >= 0 && !t2.connector.empty() && size_t(s) < t2.connector.size() &&
+                            t2.connector[size_t(s)] > 0) {
+                            EXPECT_NEAR(mis_weight_connector(t2, s, set), c->weight, 1e-9) << "split " << s2;
+                        }
+                        EXPECT_EQ(t2.connector.size(), fp.connector.size()) << "split " << s2;
+                        if (t2.connector.size() == fp.connector.size()) {
+                            for (size_t q = 0; q < fp.connector.size(); ++q)
+                                EXPECT_NEAR(t2.connector[q], fp.connector[q], 1e-9 * fp.connector[q]) << "connector[" << q << "]";
                         }
                         // Densities recomputed from any split agree with those of the sampled split.
                         for (size_t q = 0; q < full.size(); ++q) {
@@ -119,6 +142,12 @@ Checked check_scene(const SceneDesc& desc, int samples, int max_depth) {
                         }
                         sum += w;
                     }
+                    // Every connector that can produce this path joins the sum.
+                    for (size_t j = 0; j < fp.connector.size(); ++j)
+                        if (fp.connector[j] > 0) {
+                            const double wc = mis_weight_connector(fp, int(j), set);
+                            if (wc >= 0) sum += wc;
+                        }
                     // Walks and connections compute each density by the same function from the same
                     // stored positions, so every split sees the same table and the sum is exact.
                     EXPECT_NEAR(sum, 1.0, 1e-9) << "s=" << s << " t=" << t << " k=" << k << [&] {
@@ -191,10 +220,13 @@ SceneDesc mirror_box_point_light() {
     return d;
 }
 
+// The walls are planar mirrors, so the connector joins the strategies (issue 15 part 3): its
+// weights and the ordinary ones sum to 1 together, for bdpt, path and light.
 TEST(MisWeights, SumToOnePointLightPinholeWithMirrors) {
     SceneDesc d = mirror_box_point_light();
     auto c = check_scene(d, 200, 7);
     EXPECT_GT(c.paths, 500);
+    EXPECT_GT(c.connector_paths, 200);
 }
 
 // Smooth plastic walls: one BSDF with a delta lobe and a diffuse one, so a vertex may be S in one
@@ -295,6 +327,7 @@ TEST(MisWeights, SumToOneThinLensPointLightMirrors) {
     auto c = check_scene(d, 1500, 6);
     EXPECT_GT(c.paths, 500);
     EXPECT_GT(c.t0_paths, 20);
+    EXPECT_GT(c.connector_paths, 200);  // bdpt's connectors beside t = 0, which it weighs
 }
 
 // Stress: a mirror box with one diffuse wall; paths of 60+ vertices keep finite weights that sum to 1.
