@@ -65,6 +65,8 @@ Config load_config(const std::string& path) {
   r.strings("listen", c.listen);
   r.scalar("state_dir", c.state_dir);
   r.scalar("threads", c.threads);
+  r.scalar("workers", c.workers);
+  r.scalar("unit_seconds", c.unit_seconds);
   r.scalar("max_running", c.max_running);
   r.scalar("checkpoint_interval_s", c.checkpoint_interval_s);
   r.scalar("drain_timeout_s", c.drain_timeout_s);
@@ -99,21 +101,39 @@ Config load_config(const std::string& path) {
   r.scalar("tls_cert", c.tls_cert);
   r.scalar("tls_key", c.tls_key);
   if (YAML::Node users = r.get("tcp_users")) {
-    // user: TOKEN  or  user: {token_file: PATH}  (the file's first line is the token)
+    // user: TOKEN  or  user: {token: T | token_file: PATH, role: user | worker}
     if (!users.IsMap()) r.fail("tcp_users", users.Mark(), "expected a mapping of user to token");
     for (const auto& kv : users) {
       const std::string user = kv.first.as<std::string>();
       std::string token;
-      if (kv.second.IsScalar()) {
-        token = kv.second.Scalar();
-      } else if (kv.second.IsMap() && kv.second.size() == 1 && kv.second["token_file"] &&
-                 kv.second["token_file"].IsScalar()) {
-        const std::string file = kv.second["token_file"].Scalar();
-        std::ifstream in(file);
-        if (!in) r.fail("tcp_users." + user, kv.second.Mark(), "cannot read the token file '" + file + "'");
-        std::getline(in, token);
+      const YAML::Node v = kv.second;
+      auto known = [&](const YAML::Node& m) {
+        for (const auto& e : m) {
+          const std::string k = e.first.as<std::string>();
+          if (k != "token" && k != "token_file" && k != "role") return false;
+        }
+        return true;
+      };
+      if (v.IsScalar()) {
+        token = v.Scalar();
+      } else if (v.IsMap() && known(v) && (v["token"] ? 1 : 0) + (v["token_file"] ? 1 : 0) == 1 &&
+                 (v["token"] ? v["token"].IsScalar() : v["token_file"].IsScalar())) {
+        if (v["token"]) {
+          token = v["token"].Scalar();
+        } else {
+          const std::string file = v["token_file"].Scalar();
+          std::ifstream in(file);
+          if (!in) r.fail("tcp_users." + user, v.Mark(), "cannot read the token file '" + file + "'");
+          std::getline(in, token);
+        }
+        if (const YAML::Node role = v["role"]) {
+          if (!role.IsScalar() || (role.Scalar() != "user" && role.Scalar() != "worker"))
+            r.fail("tcp_users." + user + ".role", role.Mark(), "expected user or worker");
+          else if (role.Scalar() == "worker")
+            c.worker_users.insert(user);
+        }
       } else {
-        r.fail("tcp_users." + user, kv.second.Mark(), "expected a token or {token_file: PATH}");
+        r.fail("tcp_users." + user, v.Mark(), "expected a token or {token: T | token_file: PATH, role: user|worker}");
       }
       if (!valid_tcp_user_name(user))
         r.fail("tcp_users." + user, kv.first.Mark(), "a TCP user name must be printable, not all digits and not 'tcp'");
@@ -157,6 +177,8 @@ void validate_config(const Config& c) {
   if (c.frame_timeout_s < 0) bad("frame_timeout_s: must be >= 0");
   if (!(c.handshake_timeout_s > 0)) bad("handshake_timeout_s: must be > 0");
   if (c.auth_fail_limit < 0) bad("auth_fail_limit: must be >= 0 (0: no limit)");
+  if (c.workers < 0 || c.workers > 100000) bad("workers: must be in [0, 100000] (0: jobs render on the daemon)");
+  if (!(c.unit_seconds > 0)) bad("unit_seconds: must be > 0");
   for (const auto& [user, token] : c.tcp_users)
     if (!valid_tcp_user_name(user)) bad("tcp_users: '" + user + "' is not a valid TCP user name");
   for (const auto& r : c.allowed_roots) {

@@ -3,6 +3,7 @@
 // line. Loaded at start-up and again on SIGHUP (listeners and state_dir only take effect at start).
 #include <cstdint>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,13 @@ struct Config {
   // Access. TCP users and their tokens (shared secrets for the HMAC handshake); empty = TCP
   // without authentication (owner "tcp"), which is allowed only on loopback listeners.
   std::map<std::string, std::string> tcp_users;  // user -> token
+  // TCP users whose role is `worker` (tcp_users: NAME: {token: T, role: worker}): they may only
+  // take work units and the assets of those units (omega worker), never submit or control jobs.
+  std::set<std::string> worker_users;
+  // Work units (docs/farm.md "Workers"): a submit without `workers` gets this many (0: jobs render
+  // on the daemon's own threads), and units are sized to take about unit_seconds on a worker.
+  int workers = 0;
+  double unit_seconds = 4;
   std::vector<std::string> admins;  // identities that may act on any job: uids (unix) or TCP user names
   std::string tls_cert, tls_key;  // PEM files: when both are set, every TCP listener speaks TLS
 };
