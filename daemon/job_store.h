@@ -26,7 +26,7 @@ struct JobRecord {
   std::string sampler;     // empty: the scene's
   protocol::ProgressInfo progress;
   std::string message;  // why it failed
-  std::uint32_t workers = 0;   // > 0: rendered by `omega worker`s in units, at most this many at once
+  std::uint32_t workers = 0;   // > 0: rendered by `omega worker`s in units (omegad starts this many under Slurm)
   std::uint64_t unit_spp = 0;  // samples per unit; 0: sized by the daemon (config unit_seconds)
 
   protocol::JobInfo info() const;

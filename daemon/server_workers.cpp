@@ -58,7 +58,7 @@ void Server::load_work_job(const JobRecord& r) {
   std::size_t done = 0;
   for (const UnitRecord& u : w.units) done += u.state == UnitState::done;
   work_[r.id] = std::move(w);
-  log_.info("job {}: on workers (at most {} at once), {} unit(s) recorded, {} done", r.id, r.workers,
+  log_.info("job {}: on workers ({} wanted), {} unit(s) recorded, {} done", r.id, r.workers,
             work_[r.id].units.size(), done);
   advance_fold(r.id);
 }
@@ -118,13 +118,11 @@ bool Server::assign_unit(Connection& c) {
   });
   for (const JobRecord& r : jobs) {
     WorkJob& w = work_.at(r.id);
-    std::size_t running = 0;
+    // Any connected worker may take any job's units: `workers` is how many omegad starts itself
+    // (executor slurm) and sizes the tail, not a cap, so a worker started by hand always helps.
     std::optional<std::size_t> queued;
-    for (std::size_t i = 0; i < w.units.size(); ++i) {
-      running += w.units[i].state == UnitState::running;
-      if (!queued && w.units[i].state == UnitState::queued) queued = i;
-    }
-    if (running >= r.workers) continue;
+    for (std::size_t i = 0; i < w.units.size() && !queued; ++i)
+      if (w.units[i].state == UnitState::queued) queued = i;
     UnitRecord u;
     if (queued) {
       u = w.units[*queued];

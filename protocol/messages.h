@@ -117,7 +117,7 @@ struct Submit {
   std::vector<AssetRef> assets;
   std::string scene;  // payload: the scene YAML
   // Render on connected `omega worker`s instead of the daemon's own threads (docs/farm.md):
-  // at most this many units out at once; absent: the daemon's default (config `workers`).
+  // > 0: the workers omegad starts (executor slurm); absent: the daemon's default (config `workers`).
   std::optional<std::uint32_t> workers;
   std::optional<std::uint64_t> unit_spp;  // samples per work unit; absent: sized to ~unit_seconds
   bool operator==(const Submit&) const = default;
