@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -105,18 +106,25 @@ public:
         for (;;) {
             proto::WorkRequest req{c.next_id(), static_cast<uint32_t>(resolve_threads(a_.threads)), name_};
             c.send(proto::encode(req));
-            proto::DecodedFrame f;
-            if (a_.once) {
-                auto got = c.try_read(Clock::now() + std::chrono::seconds(3));
-                if (!got) return;
-                f = std::move(*got);
-                if (f.id != req.id) {
-                    f = await(c, req.id);
+            // Wait for the unit; with an idle limit, give up (and exit) when none comes in time.
+            const double idle = a_.idle_exit_s > 0 ? a_.idle_exit_s : a_.once ? 3.0 : 0.0;
+            const auto give_up = idle > 0 ? Clock::now() + std::chrono::milliseconds(static_cast<long>(idle * 1000))
+                                          : Clock::time_point::max();
+            std::optional<proto::DecodedFrame> f;
+            while (!f) {
+                const auto until = std::min(give_up, Clock::now() + std::chrono::seconds(60));
+                auto got = c.try_read(until);
+                if (!got) {
+                    if (Clock::now() >= give_up) {
+                        if (!a_.quiet) fmt::print(stderr, "omega worker: no unit for {} s; exiting\n", idle);
+                        return;
+                    }
+                    continue;
                 }
-            } else {
-                f = await(c, req.id);
+                if (got->type == proto::MessageType::ping) c.send(proto::encode(proto::Pong{got->id}));
+                else if (got->id == req.id) f = std::move(got);  // stray unit_stops are for units already given up
             }
-            const proto::WorkUnit u = c.expect<proto::WorkUnit>(f);
+            const proto::WorkUnit u = c.expect<proto::WorkUnit>(*f);
             run_unit(c, u);
         }
     }
@@ -267,7 +275,9 @@ void add_worker_command(CLI::App& app, WorkerArgs& a) {
     cmd->add_option("--threads", a.threads, "Render threads (default: all cores)")->check(CLI::NonNegativeNumber);
     cmd->add_option("--name", a.name, "Name shown by `omega status JOB` (default HOST:PID)");
     cmd->add_option("--cache", a.cache_dir, "Folder for scenes and assets (default $TMPDIR/omega-worker-UID)");
-    cmd->add_flag("--once", a.once, "Exit when the daemon has no unit to give (instead of waiting)");
+    cmd->add_flag("--once", a.once, "Exit when the daemon has no unit to give within 3 s (instead of waiting)");
+    cmd->add_option("--idle-exit", a.idle_exit_s, "Exit after this many seconds without a unit (default: never)")
+        ->check(CLI::NonNegativeNumber);
     cmd->add_flag("-q,--quiet", a.quiet, "Print only errors");
 }
 
@@ -282,7 +292,7 @@ int run_worker(const WorkerArgs& a) {
                 if (!a.quiet) fmt::print(stderr, "omega worker: connected to {}\n", c.address().text());
                 w.serve(c);
                 c.close();
-                return kExitOk;  // --once and nothing to do
+                return kExitOk;  // --once or --idle-exit, and nothing to do
             } catch (const ClientError& e) {
                 if (!e.transient()) throw;  // refused credentials, a broken worker: retrying cannot help
                 if (!a.quiet) fmt::print(stderr, "omega worker: {}; reconnecting in {} ms\n", e.what(), backoff.count());

@@ -15,6 +15,7 @@ struct WorkerArgs {
     std::string name;                    // shown by `omega status JOB`; default host:pid
     std::string cache_dir;               // scenes and assets by hash; default $TMPDIR/omega-worker-UID
     bool once = false;                   // exit when the daemon has no unit (tests, batch scripts)
+    double idle_exit_s = 0;              // exit after this long without a unit (0: never; --once: 3)
     bool quiet = false;
 };
 

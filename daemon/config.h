@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "daemon/log.h"
+#include "daemon/slurm_executor.h"
 
 namespace omega::daemon {
 
@@ -51,6 +52,10 @@ struct Config {
   // on the daemon's own threads), and units are sized to take about unit_seconds on a worker.
   int workers = 0;
   double unit_seconds = 4;
+  // Who starts the workers of a worker job: `local` (nobody: started by hand or by systemd) or
+  // `slurm` (omegad submits them with sbatch; docs/farm.md "Workers under Slurm").
+  std::string executor = "local";
+  SlurmSettings slurm;
   std::vector<std::string> admins;  // identities that may act on any job: uids (unix) or TCP user names
   std::string tls_cert, tls_key;  // PEM files: when both are set, every TCP listener speaks TLS
 };

@@ -114,6 +114,9 @@ JobStore::JobStore(const std::string& path) : path_(path) {
       " job INTEGER NOT NULL, unit INTEGER NOT NULL, begin INTEGER NOT NULL, end_ INTEGER NOT NULL,"
       " state TEXT NOT NULL, owner TEXT NOT NULL DEFAULT '', time_s REAL NOT NULL DEFAULT 0,"
       " PRIMARY KEY (job, unit))");
+  exec(
+      "CREATE TABLE IF NOT EXISTS slurm_jobs ("
+      " slurm_id TEXT PRIMARY KEY, job INTEGER NOT NULL, tasks INTEGER NOT NULL, state TEXT NOT NULL)");
 }
 
 JobStore::~JobStore() { sqlite3_close(db_); }
@@ -281,6 +284,34 @@ void JobStore::put_unit(const UnitRecord& u) {
   s.bind(3, static_cast<std::int64_t>(u.begin)).bind(4, static_cast<std::int64_t>(u.end));
   s.bind(5, std::string(to_string(u.state))).bind(6, u.owner).bind(7, u.time_s);
   s.step();
+}
+
+void JobStore::add_slurm_job(std::uint64_t job, const std::string& slurm_id, int tasks) {
+  Stmt s(db_, "INSERT OR REPLACE INTO slurm_jobs (slurm_id, job, tasks, state) VALUES (?, ?, ?, 'active')", path_);
+  s.bind(1, slurm_id).bind(2, static_cast<std::int64_t>(job)).bind(3, static_cast<std::int64_t>(tasks));
+  s.step();
+}
+
+void JobStore::end_slurm_job(const std::string& slurm_id) {
+  Stmt s(db_, "UPDATE slurm_jobs SET state = 'ended' WHERE slurm_id = ?", path_);
+  s.bind(1, slurm_id);
+  s.step();
+}
+
+std::vector<JobStore::SlurmRecord> JobStore::active_slurm_jobs() {
+  Stmt s(db_, "SELECT job, slurm_id, tasks FROM slurm_jobs WHERE state = 'active' ORDER BY slurm_id", path_);
+  std::vector<SlurmRecord> out;
+  while (s.step())
+    out.push_back({static_cast<std::uint64_t>(sqlite3_column_int64(s.get(), 0)), text(s.get(), 1),
+                   static_cast<int>(sqlite3_column_int64(s.get(), 2))});
+  return out;
+}
+
+std::size_t JobStore::count_slurm_jobs(std::uint64_t job) {
+  Stmt s(db_, "SELECT count(*) FROM slurm_jobs WHERE job = ?", path_);
+  s.bind(1, static_cast<std::int64_t>(job));
+  s.step();
+  return static_cast<std::size_t>(sqlite3_column_int64(s.get(), 0));
 }
 
 void JobStore::requeue_running_units() { exec("UPDATE units SET state = 'queued', owner = '' WHERE state = 'running'"); }

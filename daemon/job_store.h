@@ -83,6 +83,18 @@ class JobStore {
   // At start-up: units that were running when the daemon died go back to the queue.
   void requeue_running_units();
 
+  // Slurm jobs of worker jobs (executor slurm): recorded once sbatch returns their id, marked
+  // ended when squeue no longer lists them or omegad scancels them.
+  struct SlurmRecord {
+    std::uint64_t job = 0;
+    std::string slurm_id;
+    int tasks = 0;
+  };
+  void add_slurm_job(std::uint64_t job, const std::string& slurm_id, int tasks);
+  void end_slurm_job(const std::string& slurm_id);
+  std::vector<SlurmRecord> active_slurm_jobs();  // not ended, by slurm id
+  std::size_t count_slurm_jobs(std::uint64_t job);  // ever submitted for the job
+
   // How long a statement waits for a lock held elsewhere before failing (default 5000 ms).
   // While it waits, the loop thread is blocked; retries use a short one (QuickBusy).
   void set_busy_timeout_ms(int ms);

@@ -348,6 +348,7 @@ void Server::maybe_finish_shutdown() {
 
 void Server::sweep_timeouts() {
   dispatch_work();  // units a store error kept back are retried here
+  poll_slurm();     // executor slurm: at most every slurm.poll_s
   const auto now = std::chrono::steady_clock::now();
   auto secs = [&](std::chrono::steady_clock::time_point t) { return std::chrono::duration<double>(now - t).count(); };
   std::vector<std::uint64_t> cut;

@@ -162,6 +162,18 @@ class Server : public FrameSink {
   // Whether a connection may take work: role worker, or an identity that may act on any job.
   bool may_work(const Connection& c) const;
   std::uint64_t unit_size(const JobRecord& r, const WorkJob& w, const Connection& c) const;
+  // server_slurm.cpp (executor slurm): every poll_s, squeue the workers omegad started; start
+  // them for worker jobs that have work and fewer live workers than they want; scancel them
+  // when a job ends, is paused or cancelled.
+  void poll_slurm();
+  void on_slurm_alive(const std::map<std::string, int>& alive, const std::string& error);
+  void start_slurm_workers(std::uint64_t job, int count);
+  void stop_slurm_workers(std::uint64_t job, const std::string& why);
+  bool needs_work(std::uint64_t job) const;
+  bool slurm_polling_ = false;
+  std::chrono::steady_clock::time_point next_slurm_poll_{};
+  std::map<std::uint64_t, int> slurm_started_;  // job -> workers started in this process
+  std::set<std::uint64_t> slurm_launching_;     // jobs with an sbatch under way
 
   std::string config_path_;
   std::function<void(Config&)> overrides_;

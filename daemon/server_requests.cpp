@@ -369,6 +369,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
       if (is_worker_job(job)) {
         stop_units(job, "cancelled");
         work_.erase(job);
+        stop_slurm_workers(job, "cancelled");
       }
       publisher_.done(job, JobState::cancelled, r->progress, std::nullopt);
       log_.info("job {}: cancelled by {}", job, c.user);
@@ -377,7 +378,10 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
       if (r->state != JobState::queued && r->state != JobState::running) return bad_state();
       store_->set_state(job, JobState::paused);
       if (live) running->second.worker->request_stop(StopKind::pause);
-      if (is_worker_job(job)) stop_units(job, "paused");
+      if (is_worker_job(job)) {
+        stop_units(job, "paused");
+        stop_slurm_workers(job, "paused");  // resume starts them again (server_slurm.cpp)
+      }
       publisher_.progress(job, JobState::paused, r->progress);
       log_.info("job {}: paused by {}", job, c.user);
       break;
@@ -385,6 +389,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
       if (r->state != JobState::paused) return bad_state();
       store_->set_state(job, JobState::queued);
       publisher_.progress(job, JobState::queued, r->progress);
+      next_slurm_poll_ = {};  // executor slurm: its workers start again at the next tick
       log_.info("job {}: resumed by {}", job, c.user);
       break;
     case MessageType::set_priority:
@@ -399,6 +404,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
       if (is_worker_job(job)) {
         stop_units(job, "deleted");
         work_.erase(job);
+        stop_slurm_workers(job, "deleted");
       }
       store_->remove(job);
       std::error_code ec;

@@ -58,6 +58,7 @@ void Server::load_work_job(const JobRecord& r) {
   std::size_t done = 0;
   for (const UnitRecord& u : w.units) done += u.state == UnitState::done;
   work_[r.id] = std::move(w);
+  next_slurm_poll_ = {};  // executor slurm: start its workers at the next tick, not a poll_s later
   log_.info("job {}: on workers ({} wanted), {} unit(s) recorded, {} done", r.id, r.workers,
             work_[r.id].units.size(), done);
   advance_fold(r.id);
@@ -415,6 +416,7 @@ void Server::on_work_done(std::uint64_t job, std::uint64_t spp, const std::strin
   if (it == work_.end()) return;
   stop_units(job, error.empty() ? "job done" : "job failed");
   work_.erase(it);
+  stop_slurm_workers(job, error.empty() ? "job done" : "job failed");
   std::optional<JobRecord> r = store_->get(job);
   if (!r || finished(r->state)) return;
   protocol::ProgressInfo p = r->progress;
