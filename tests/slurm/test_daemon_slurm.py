@@ -3,7 +3,8 @@ cluster (tests/support/slurm_cluster.py): a job with `workers: 2` makes omegad s
 array of `omega worker`s, recorded in its SQLite store; one more worker is started by hand and
 kill -9'ed mid-unit. The result must equal `omega merge` of the same units rendered locally bit
 for bit (and `omega render --spp N` within 1e-6), units must have been rendered by the Slurm
-workers, and omegad must scancel its Slurm job when the job is done.
+workers, a Slurm worker that Slurm ends (scancel of its task) must be replaced while the job has
+work left, and omegad must scancel its Slurm jobs when the job is done.
 Usage: test_daemon_slurm.py OMEGAD OMEGA EXR_COMPARE SOURCE_DIR. Fails (never skips) when Slurm
 cannot run, with the reason."""
 import os
@@ -22,7 +23,7 @@ from harness import EXR_COMPARE, OMEGA, SLOWDOWN, Daemon, Test, free_port, small
 
 ALICE, WORKER = "alice-token-0123456789", "worker-token-0123456789"
 SANITIZED = bool(os.environ.get("OMEGA_SANITIZER"))
-W, H, UNIT, UNITS = (48, 32, 8, 6) if SANITIZED else (120, 90, 32, 10)
+W, H, UNIT, UNITS = (48, 32, 8, 12) if SANITIZED else (160, 120, 48, 14)
 SPP = UNIT * UNITS
 
 
@@ -101,12 +102,19 @@ slurm:
             if hand.poll() is None:
                 hand.kill()
         d.wait_log(rf"job {job}: unit \d+ \(samples \d+:\d+\) back to the queue: conn \d+ \(hand\) left", 30)
+        # Slurm ends one array task (as a node failure or a preemption would): omegad starts another.
+        m = d.wait_log(rf"job {job}: unit \d+ \(samples \d+:\d+\) to conn \d+ \((slurm-{slurm_id}_\d)\)", 60)
+        task = m.group(1)[len("slurm-"):]
+        subprocess.run(["scancel", task], env=cluster.env(), check=True, timeout=30)
+        d.wait_log(rf"job {job}: 1 of its Slurm workers ended with work left; starting 1 more", 30)
+        m = d.wait_log(rf"job {job}: Slurm job (\d+): 1 worker\(s\) submitted", 30)
+        assert m.group(1) != slurm_id
         d.wait_log(rf"job {job}: done on workers: {SPP} spp", 120)
         slurm_workers = set(re.findall(rf"job {job}: unit \d+ \(samples \d+:\d+\) done by conn \d+ \((slurm-{slurm_id}_\d)\)",
                                        d.log()))
         assert slurm_workers, "no unit was rendered by a Slurm worker:\n" + d.log()[-3000:]
         print(f"units rendered by Slurm workers {sorted(slurm_workers)} and by hand", flush=True)
-        d.wait_log(rf"job {job}: scancel {slurm_id} \(job done\)", 10)
+        d.wait_log(rf"job {job}: scancel [0-9 ]*{m.group(1)}[0-9 ]* \(job done\)", 10)
         deadline = time.monotonic() + 30
         while time.monotonic() < deadline:
             q = subprocess.run(["squeue", "-h", "-o", "%i %T"], env=cluster.env(), capture_output=True, text=True)
