@@ -173,12 +173,16 @@ def test_cancel_and_pause_reach_workers(tmp, daemons):
         wait_state(login(d, "alice", ALICE), job, ["paused"], 10)
         omega(["resume", str(job)], alice)
         wait_file(log, rf"(?s)stopped by the daemon.*job {job} unit 0: samples", 30)
-        # A higher-priority job's units go out first.
+        # A higher-priority job's units go out first: the next unit after it arrives is its own,
+        # although the first job has units left.
         hi = int(omega(["submit", scene, "--spp", str(UNIT), "--workers", "1", "--unit-spp", str(UNIT),
                         "--priority", "5", "-q"], alice).stdout.split()[-1])
-        omega(["cancel", str(job)], alice)
-        wait_file(log, rf"job {job} unit 0: stopped by the daemon", 30)
         wait_file(log, rf"job {hi} unit 0: done", 60)
+        after = d.log().split(f"job {hi} accepted", 1)[1]
+        first = re.search(r"job (\d+): unit \d+ \(samples \d+:\d+\) to conn", after)
+        assert first and int(first.group(1)) == hi, after[:3000]
+        omega(["cancel", str(job)], alice)
+        wait_file(log, rf"job {job} unit \d+: stopped by the daemon", 30)
         d.wait_log(rf"job {hi}: done on workers: {UNIT} spp", 30)
         h = omega(["status", str(job)], alice).stdout
         assert "cancelled" in h, h
