@@ -109,6 +109,7 @@ def test_workers_exact_through_deaths(tmp, daemons):
             elif h["type"] == "done":
                 done = h
         assert done and done["state"] == "done" and done["progress"]["spp"] == SPP, done
+        assert tiles > 0, "the watcher saw no tile of the merged image"
         d.wait_log(rf"job {job}: done on workers: {SPP} spp", 10)
         assert re.search(r"conn \d+ \(B\)", d.log()) and re.search(r"conn \d+ \(A2\)", d.log())
         # `omega status` names the workers of the job.
