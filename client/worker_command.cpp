@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <exception>
 #include <filesystem>
@@ -23,7 +24,8 @@
 #include "integrator/render_session.h"
 #include "pathspace/classify.h"
 #include "remote_common.h"
-#include "scene/mitsuba_importer.h"
+#include "io/file_gate.h"
+#include "scene/scene_parser.h"
 #include "scene/scene.h"
 #include "scene/scene_error.h"
 #include "scene_hash.h"
@@ -46,11 +48,12 @@ struct LocalScene {
     std::string hash;  // omega.scene_hash, as `omega render --samples` writes it
 };
 
+// The daemon's name for the job's scene file (daemon/job_scene.cpp, scene_file_name).
 std::string scene_file(const std::string& job_name) {
-    const bool safe = !job_name.empty() && job_name.size() < 200 &&
-                      job_name.find_first_of("/\\") == std::string::npos && job_name != "." && job_name != ".." &&
-                      job_name.find('\0') == std::string::npos;
-    return (safe ? job_name : std::string("scene")) + ".yaml";
+    bool ok = !job_name.empty() && job_name.size() <= 200 && job_name[0] != '.';
+    for (char c : job_name)
+        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) ok = false;
+    return (ok ? job_name : std::string("scene")) + ".yaml";
 }
 
 void write_file(const std::string& path, const std::string& data) {
@@ -136,7 +139,7 @@ private:
         const std::string key = sha256_bytes(keytext);
         if (scene_ && scene_->key == key) return *scene_;
         scene_.reset();
-        const std::string dir = cache_ + "/" + key.substr(0, 24) + "/files";
+        const std::string dir = fs::absolute(cache_ + "/" + key.substr(0, 24) + "/files").lexically_normal().string();
         for (const auto& a : u.assets) {
             const std::string path = dir + "/" + a.name;
             std::error_code ec;
@@ -152,7 +155,9 @@ private:
         s->key = key;
         s->path = dir + "/" + scene_file(u.name);
         write_file(s->path, u.scene);
-        s->desc = load_scene_file(s->path);
+        // Confined to the job's own files, as in the daemon: a scene from the daemon never reads
+        // anything else on this machine.
+        s->desc = parse_scene_string(u.scene, s->path, FileGate::confined({dir}));
         if (u.integrator == "path") s->desc.integrator.type = IntegratorType::Path;
         if (u.integrator == "light") s->desc.integrator.type = IntegratorType::Light;
         if (u.integrator == "bdpt") s->desc.integrator.type = IntegratorType::Bdpt;
