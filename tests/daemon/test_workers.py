@@ -20,8 +20,9 @@ CONFIG = f"""tcp_users:
   farm: {{token: {WORKER}, role: worker}}
 """
 SANITIZED = bool(os.environ.get("OMEGA_SANITIZER"))
-# Units of about a second on one thread (less work under a sanitizer, which runs 5-15x slower).
-W, H, UNIT, UNITS = (48, 32, 8, 6) if SANITIZED else (120, 90, 32, 8)
+# Units of about a second on one thread (a smaller film under a sanitizer, which renders ~6x slower),
+# so that a worker killed right after it starts a unit dies in the middle of it.
+W, H, UNIT, UNITS = (64, 48, 64, 6) if SANITIZED else (120, 90, 96, 6)
 SPP = UNIT * UNITS
 
 
@@ -85,7 +86,6 @@ def test_workers_exact_through_deaths(tmp, daemons):
         # A dies by kill -9 in the middle of its second unit: that unit goes back to the queue.
         wait_file(a_log, r"unit \d+: done", 60)
         m = wait_file(a_log, r"(?s)unit \d+: done.*unit (\d+): samples", 60)
-        time.sleep(0.2)
         a.send_signal(signal.SIGKILL)
         a.wait(10)
         d.wait_log(rf"job {job}: unit {m.group(1)} \(samples \d+:\d+\) back to the queue: conn \d+ \(A\) left", 30)

@@ -95,7 +95,6 @@ slurm:
                                     stdout=subprocess.DEVNULL, stderr=lf)
         try:
             wait_file(log, r"(?s)unit \d+: done.*unit (\d+): samples", 60)
-            time.sleep(0.2)
             hand.send_signal(signal.SIGKILL)
             hand.wait(10)
         finally:
