@@ -54,6 +54,16 @@ int run_status(const JobArgs& a) {
                 {"rate", rate(i.progress.samples_per_s) + " samples/s"},
             });
             std::fputs(out.c_str(), stdout);
+            if (!i.workers.empty()) {  // a job on omega workers
+                std::vector<std::vector<std::string>> rows{{"worker", "units done", "rendering", "samples/s"}};
+                for (const auto& w : i.workers) {
+                    std::string units;
+                    for (const auto& u : w.units) units += (units.empty() ? "" : ",") + u;
+                    rows.push_back({w.name, std::to_string(w.units_done), units.empty() ? "-" : units,
+                                    rate(w.samples_per_s)});
+                }
+                std::fputs(("\n" + format_table(rows)).c_str(), stdout);
+            }
             return kExitOk;
         }
         proto::List l{c.next_id()};

@@ -13,6 +13,7 @@
 #include "render_command.h"
 #include "submit_command.h"
 #include "view_command.h"
+#include "worker_command.h"
 
 int main(int argc, char** argv) {
     CLI::App app{"omega: unbiased light transport renderer and render-daemon client"};
@@ -35,6 +36,8 @@ int main(int argc, char** argv) {
     omega::add_merge_command(app, merge);
     omega::client::ViewArgs view;
     omega::client::add_view_command(app, view);
+    omega::client::WorkerArgs worker;
+    omega::client::add_worker_command(app, worker);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -51,6 +54,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("compare")) return omega::run_compare(compare);
         if (app.got_subcommand("merge")) return omega::run_merge(merge);
         if (app.got_subcommand("view")) return omega::client::run_view(view);
+        if (app.got_subcommand("worker")) return omega::client::run_worker(worker);
     } catch (const std::exception& e) {
         fmt::print(stderr, "omega: internal error: {}\n", e.what());
         return 1;

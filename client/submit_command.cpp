@@ -41,6 +41,8 @@ SubmitResult submit_scene(Connection& c, const ScannedScene& scene, const JobSpe
     s.sampler = spec.sampler;
     s.assets = scene.refs();
     s.scene = scene.yaml;
+    s.workers = spec.workers;
+    s.unit_spp = spec.unit_spp;
 
     SubmitResult result;
     proto::DecodedFrame reply = c.request(proto::encode(s), s.id);
@@ -93,6 +95,12 @@ void add_submit_command(CLI::App& app, SubmitArgs& a) {
         ->check(CLI::IsMember({"path", "light", "bdpt"}));
     cmd->add_option("--sampler", a.sampler, "sobol | independent (overrides the scene's sampler)")
         ->check(CLI::IsMember({"sobol", "independent"}));
+    cmd->add_option("--workers", a.workers,
+                    "Render on `omega worker`s, at most N at once, in sample-range units (0: on the daemon; "
+                    "default: the daemon's config)")
+        ->check(CLI::Range(uint32_t(0), uint32_t(proto::kMaxWorkers)));
+    cmd->add_option("--unit-spp", a.unit_spp, "Samples per work unit (default: sized to a few seconds each)")
+        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 40));
     cmd->add_flag("-q,--quiet", a.quiet, "Print only the job id");
 }
 
@@ -107,6 +115,8 @@ int run_submit(const SubmitArgs& a) {
         spec.seed = a.seed;
         if (!a.integrator.empty()) spec.integrator = a.integrator;
         if (!a.sampler.empty()) spec.sampler = a.sampler;
+        spec.workers = a.workers;
+        spec.unit_spp = a.unit_spp;
         Connection c = connect_to(a.host);
         SubmitResult r = submit_scene(c, scene, spec);
         c.close();

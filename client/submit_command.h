@@ -16,6 +16,8 @@ struct JobSpec {  // what a submit asks for, beside the scene
     uint64_t seed = 0;
     std::optional<std::string> integrator;
     std::optional<std::string> sampler;  // sobol | independent; none: the scene's
+    std::optional<uint32_t> workers;     // render on omega workers (docs/farm.md "Workers")
+    std::optional<uint64_t> unit_spp;
 };
 
 struct SubmitResult {
@@ -38,6 +40,8 @@ struct SubmitArgs {
     uint64_t seed = 0;
     std::string integrator;
     std::string sampler;
+    std::optional<uint32_t> workers;
+    std::optional<uint64_t> unit_spp;
     bool quiet = false;
 };
 

@@ -65,6 +65,44 @@ Config load_config(const std::string& path) {
   r.strings("listen", c.listen);
   r.scalar("state_dir", c.state_dir);
   r.scalar("threads", c.threads);
+  r.scalar("workers", c.workers);
+  r.scalar("unit_seconds", c.unit_seconds);
+  r.scalar("executor", c.executor);
+  if (YAML::Node sl = r.get("slurm")) {
+    if (!sl.IsMap()) r.fail("slurm", sl.Mark(), "expected a mapping");
+    for (const auto& kv : sl) {
+      const std::string k = kv.first.as<std::string>();
+      const YAML::Node v = kv.second;
+      auto str = [&](std::string& out) {
+        if (!v.IsScalar()) r.fail("slurm." + k, v.Mark(), "expected a string");
+        else out = v.Scalar();
+      };
+      auto num = [&](auto& out) {
+        try {
+          out = v.as<std::decay_t<decltype(out)>>();
+        } catch (const std::exception&) {
+          r.fail("slurm." + k, v.Mark(), "expected a number");
+        }
+      };
+      if (k == "omega") str(c.slurm.omega);
+      else if (k == "connect") str(c.slurm.connect);
+      else if (k == "user") str(c.slurm.user);
+      else if (k == "token_file") str(c.slurm.token_file);
+      else if (k == "partition") str(c.slurm.partition);
+      else if (k == "time_limit") str(c.slurm.time_limit);
+      else if (k == "threads") num(c.slurm.threads);
+      else if (k == "poll_s") num(c.slurm.poll_s);
+      else if (k == "idle_exit_s") num(c.slurm.idle_exit_s);
+      else if (k == "max_replacements") num(c.slurm.max_replacements);
+      else if (k == "sbatch_options") {
+        if (!v.IsSequence()) r.fail("slurm.sbatch_options", v.Mark(), "expected a list of strings");
+        else
+          for (const auto& o : v) c.slurm.sbatch_options.push_back(o.as<std::string>());
+      } else {
+        r.fail("slurm." + k, kv.first.Mark(), "unknown key");
+      }
+    }
+  }
   r.scalar("max_running", c.max_running);
   r.scalar("checkpoint_interval_s", c.checkpoint_interval_s);
   r.scalar("drain_timeout_s", c.drain_timeout_s);
@@ -99,21 +137,39 @@ Config load_config(const std::string& path) {
   r.scalar("tls_cert", c.tls_cert);
   r.scalar("tls_key", c.tls_key);
   if (YAML::Node users = r.get("tcp_users")) {
-    // user: TOKEN  or  user: {token_file: PATH}  (the file's first line is the token)
+    // user: TOKEN  or  user: {token: T | token_file: PATH, role: user | worker}
     if (!users.IsMap()) r.fail("tcp_users", users.Mark(), "expected a mapping of user to token");
     for (const auto& kv : users) {
       const std::string user = kv.first.as<std::string>();
       std::string token;
-      if (kv.second.IsScalar()) {
-        token = kv.second.Scalar();
-      } else if (kv.second.IsMap() && kv.second.size() == 1 && kv.second["token_file"] &&
-                 kv.second["token_file"].IsScalar()) {
-        const std::string file = kv.second["token_file"].Scalar();
-        std::ifstream in(file);
-        if (!in) r.fail("tcp_users." + user, kv.second.Mark(), "cannot read the token file '" + file + "'");
-        std::getline(in, token);
+      const YAML::Node v = kv.second;
+      auto known = [&](const YAML::Node& m) {
+        for (const auto& e : m) {
+          const std::string k = e.first.as<std::string>();
+          if (k != "token" && k != "token_file" && k != "role") return false;
+        }
+        return true;
+      };
+      if (v.IsScalar()) {
+        token = v.Scalar();
+      } else if (v.IsMap() && known(v) && (v["token"] ? 1 : 0) + (v["token_file"] ? 1 : 0) == 1 &&
+                 (v["token"] ? v["token"].IsScalar() : v["token_file"].IsScalar())) {
+        if (v["token"]) {
+          token = v["token"].Scalar();
+        } else {
+          const std::string file = v["token_file"].Scalar();
+          std::ifstream in(file);
+          if (!in) r.fail("tcp_users." + user, v.Mark(), "cannot read the token file '" + file + "'");
+          std::getline(in, token);
+        }
+        if (const YAML::Node role = v["role"]) {
+          if (!role.IsScalar() || (role.Scalar() != "user" && role.Scalar() != "worker"))
+            r.fail("tcp_users." + user + ".role", role.Mark(), "expected user or worker");
+          else if (role.Scalar() == "worker")
+            c.worker_users.insert(user);
+        }
       } else {
-        r.fail("tcp_users." + user, kv.second.Mark(), "expected a token or {token_file: PATH}");
+        r.fail("tcp_users." + user, v.Mark(), "expected a token or {token: T | token_file: PATH, role: user|worker}");
       }
       if (!valid_tcp_user_name(user))
         r.fail("tcp_users." + user, kv.first.Mark(), "a TCP user name must be printable, not all digits and not 'tcp'");
@@ -157,6 +213,19 @@ void validate_config(const Config& c) {
   if (c.frame_timeout_s < 0) bad("frame_timeout_s: must be >= 0");
   if (!(c.handshake_timeout_s > 0)) bad("handshake_timeout_s: must be > 0");
   if (c.auth_fail_limit < 0) bad("auth_fail_limit: must be >= 0 (0: no limit)");
+  if (c.workers < 0 || c.workers > 100000) bad("workers: must be in [0, 100000] (0: jobs render on the daemon)");
+  if (!(c.unit_seconds > 0)) bad("unit_seconds: must be > 0");
+  if (c.executor != "local" && c.executor != "slurm") bad("executor: must be local or slurm");
+  if (c.executor == "slurm") {
+    if (c.slurm.connect.empty()) bad("slurm.connect: the address workers connect back to (tcp:HOST:PORT) is required");
+    if (c.slurm.user.empty() || !c.worker_users.count(c.slurm.user))
+      bad("slurm.user: must name a tcp_users entry with role: worker");
+    if (c.slurm.token_file.empty()) bad("slurm.token_file: the worker token's file (0600, on the nodes) is required");
+    if (c.slurm.threads < 0) bad("slurm.threads: must be >= 0");
+    if (!(c.slurm.poll_s >= 1)) bad("slurm.poll_s: must be >= 1");
+    if (!(c.slurm.idle_exit_s > 0)) bad("slurm.idle_exit_s: must be > 0");
+    if (c.slurm.max_replacements < 0) bad("slurm.max_replacements: must be >= 0");
+  }
   for (const auto& [user, token] : c.tcp_users)
     if (!valid_tcp_user_name(user)) bad("tcp_users: '" + user + "' is not a valid TCP user name");
   for (const auto& r : c.allowed_roots) {

@@ -3,10 +3,12 @@
 // line. Loaded at start-up and again on SIGHUP (listeners and state_dir only take effect at start).
 #include <cstdint>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "daemon/log.h"
+#include "daemon/slurm_executor.h"
 
 namespace omega::daemon {
 
@@ -43,6 +45,17 @@ struct Config {
   // Access. TCP users and their tokens (shared secrets for the HMAC handshake); empty = TCP
   // without authentication (owner "tcp"), which is allowed only on loopback listeners.
   std::map<std::string, std::string> tcp_users;  // user -> token
+  // TCP users whose role is `worker` (tcp_users: NAME: {token: T, role: worker}): they may only
+  // take work units and the assets of those units (omega worker), never submit or control jobs.
+  std::set<std::string> worker_users;
+  // Work units (docs/farm.md "Workers"): a submit without `workers` gets this many (0: jobs render
+  // on the daemon's own threads), and units are sized to take about unit_seconds on a worker.
+  int workers = 0;
+  double unit_seconds = 4;
+  // Who starts the workers of a worker job: `local` (nobody: started by hand or by systemd) or
+  // `slurm` (omegad submits them with sbatch; docs/farm.md "Workers under Slurm").
+  std::string executor = "local";
+  SlurmSettings slurm;
   std::vector<std::string> admins;  // identities that may act on any job: uids (unix) or TCP user names
   std::string tls_cert, tls_key;  // PEM files: when both are set, every TCP listener speaks TLS
 };

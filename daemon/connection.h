@@ -26,6 +26,16 @@ struct PendingSubmit {
   bool validating = false;
 };
 
+// An `omega worker` session on a connection (docs/farm.md "Workers"). Loop thread only.
+struct WorkerSession {
+  std::string name;  // "conn ID (the worker's own name)"
+  std::uint32_t threads = 1;
+  std::optional<std::uint64_t> waiting;  // a work_request not yet answered
+  std::set<std::pair<std::uint64_t, std::uint64_t>> units;  // (job, unit) it renders now
+  std::map<std::uint64_t, std::uint64_t> done;  // job -> units finished in this session
+  double samples_per_s = 0;  // of its last unit
+};
+
 class Connection {
  public:
   // ssl: a TLS session on fd (owned from now on), or nullptr for plain bytes.
@@ -72,6 +82,10 @@ class Connection {
   std::map<std::uint64_t, PendingSubmit> pending;  // by submit id
   std::set<std::pair<std::uint64_t, std::uint64_t>> subscriptions;  // (job, subscribe id)
   bool write_armed = false;  // EPOLLOUT registered
+  // `omega worker` sessions (docs/farm.md "Workers"). worker_role: a tcp_users entry with role
+  // worker, which may send only the worker messages (and ping, bye).
+  bool worker_role = false;
+  std::optional<WorkerSession> worker;  // set by its first work_request
 
  private:
   int fd_;

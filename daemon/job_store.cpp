@@ -2,6 +2,7 @@
 
 #include <sqlite3.h>
 
+#include <set>
 #include <stdexcept>
 
 namespace omega::daemon {
@@ -39,7 +40,7 @@ class Stmt {
 
 const char* kColumns =
     "id, name, owner, priority, state, halt_spp, halt_time, halt_error, seed, integrator, "
-    "pass, spp, elapsed_s, rel_error, samples_per_s, message, sampler";
+    "pass, spp, elapsed_s, rel_error, samples_per_s, message, sampler, workers, unit_spp";
 
 std::optional<std::int64_t> opt_int(sqlite3_stmt* s, int i) {
   if (sqlite3_column_type(s, i) == SQLITE_NULL) return std::nullopt;
@@ -96,14 +97,26 @@ JobStore::JobStore(const std::string& path) : path_(path) {
       " rel_error REAL, samples_per_s REAL NOT NULL DEFAULT 0, message TEXT NOT NULL DEFAULT '',"
       " created TEXT NOT NULL DEFAULT (datetime('now')))");
   exec("CREATE INDEX IF NOT EXISTS jobs_queue ON jobs(state, priority DESC, id)");
-  // Stores made before the sampler override existed lack its column; their jobs keep the
-  // scene's sampler (empty override).
-  bool has_sampler = false;
+  // Stores made before a column existed lack it: the sampler override (empty: the scene's) and
+  // the work units (0 workers: a local job).
+  std::set<std::string> columns;
   {
     Stmt info(db_, "SELECT name FROM pragma_table_info('jobs')", path_);
-    while (info.step()) has_sampler |= text(info.get(), 0) == "sampler";
+    while (info.step()) columns.insert(text(info.get(), 0));
   }
-  if (!has_sampler) exec("ALTER TABLE jobs ADD COLUMN sampler TEXT NOT NULL DEFAULT ''");
+  if (!columns.count("sampler")) exec("ALTER TABLE jobs ADD COLUMN sampler TEXT NOT NULL DEFAULT ''");
+  if (!columns.count("workers")) exec("ALTER TABLE jobs ADD COLUMN workers INTEGER NOT NULL DEFAULT 0");
+  if (!columns.count("unit_spp")) exec("ALTER TABLE jobs ADD COLUMN unit_spp INTEGER NOT NULL DEFAULT 0");
+  // A job's work units (docs/farm.md "Workers"): sample ranges [begin, end_), their state and the
+  // worker session that holds a running one.
+  exec(
+      "CREATE TABLE IF NOT EXISTS units ("
+      " job INTEGER NOT NULL, unit INTEGER NOT NULL, begin INTEGER NOT NULL, end_ INTEGER NOT NULL,"
+      " state TEXT NOT NULL, owner TEXT NOT NULL DEFAULT '', time_s REAL NOT NULL DEFAULT 0,"
+      " PRIMARY KEY (job, unit))");
+  exec(
+      "CREATE TABLE IF NOT EXISTS slurm_jobs ("
+      " slurm_id TEXT PRIMARY KEY, job INTEGER NOT NULL, tasks INTEGER NOT NULL, state TEXT NOT NULL)");
 }
 
 JobStore::~JobStore() { sqlite3_close(db_); }
@@ -121,12 +134,13 @@ std::uint64_t JobStore::insert(const JobRecord& r, const std::function<void(std:
   exec("BEGIN IMMEDIATE");
   try {
     Stmt s(db_,
-           "INSERT INTO jobs (name, owner, priority, state, halt_spp, halt_time, halt_error, seed, integrator, sampler)"
-           " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+           "INSERT INTO jobs (name, owner, priority, state, halt_spp, halt_time, halt_error, seed, integrator, sampler,"
+           " workers, unit_spp) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
            path_);
     s.bind(1, r.name).bind(2, r.owner).bind(3, r.priority).bind(4, std::string(protocol::to_string(r.state)));
     s.bind_opt(5, r.halt.spp).bind_opt(6, r.halt.time_s).bind_opt(7, r.halt.target_error);
     s.bind(8, static_cast<std::int64_t>(r.seed)).bind(9, r.integrator).bind(10, r.sampler);
+    s.bind(11, static_cast<std::int64_t>(r.workers)).bind(12, static_cast<std::int64_t>(r.unit_spp));
     s.step();
     auto id = static_cast<std::uint64_t>(sqlite3_last_insert_rowid(db_));
     if (before_commit) before_commit(id);
@@ -162,6 +176,8 @@ std::vector<JobRecord> JobStore::select(const std::string& where_order, std::opt
     r.progress.samples_per_s = sqlite3_column_double(q, 14);
     r.message = text(q, 15);
     r.sampler = text(q, 16);
+    r.workers = static_cast<std::uint32_t>(sqlite3_column_int64(q, 17));
+    r.unit_spp = static_cast<std::uint64_t>(sqlite3_column_int64(q, 18));
     out.push_back(std::move(r));
   }
   return out;
@@ -227,6 +243,77 @@ void JobStore::remove(std::uint64_t id) {
   Stmt s(db_, "DELETE FROM jobs WHERE id = ?", path_);
   s.bind(1, static_cast<std::int64_t>(id));
   s.step();
+  Stmt u(db_, "DELETE FROM units WHERE job = ?", path_);
+  u.bind(1, static_cast<std::int64_t>(id));
+  u.step();
 }
+
+const char* to_string(UnitState s) {
+  switch (s) {
+    case UnitState::queued: return "queued";
+    case UnitState::running: return "running";
+    case UnitState::done: return "done";
+  }
+  return "queued";
+}
+
+std::vector<UnitRecord> JobStore::units(std::uint64_t job) {
+  Stmt s(db_, "SELECT unit, begin, end_, state, owner, time_s FROM units WHERE job = ? ORDER BY unit", path_);
+  s.bind(1, static_cast<std::int64_t>(job));
+  std::vector<UnitRecord> out;
+  while (s.step()) {
+    sqlite3_stmt* q = s.get();
+    UnitRecord u;
+    u.job = job;
+    u.unit = static_cast<std::uint64_t>(sqlite3_column_int64(q, 0));
+    u.begin = static_cast<std::uint64_t>(sqlite3_column_int64(q, 1));
+    u.end = static_cast<std::uint64_t>(sqlite3_column_int64(q, 2));
+    const std::string st = text(q, 3);
+    u.state = st == "done" ? UnitState::done : st == "running" ? UnitState::running : UnitState::queued;
+    u.owner = text(q, 4);
+    u.time_s = sqlite3_column_double(q, 5);
+    out.push_back(std::move(u));
+  }
+  return out;
+}
+
+void JobStore::put_unit(const UnitRecord& u) {
+  Stmt s(db_, "INSERT OR REPLACE INTO units (job, unit, begin, end_, state, owner, time_s) VALUES (?, ?, ?, ?, ?, ?, ?)",
+         path_);
+  s.bind(1, static_cast<std::int64_t>(u.job)).bind(2, static_cast<std::int64_t>(u.unit));
+  s.bind(3, static_cast<std::int64_t>(u.begin)).bind(4, static_cast<std::int64_t>(u.end));
+  s.bind(5, std::string(to_string(u.state))).bind(6, u.owner).bind(7, u.time_s);
+  s.step();
+}
+
+void JobStore::add_slurm_job(std::uint64_t job, const std::string& slurm_id, int tasks) {
+  Stmt s(db_, "INSERT OR REPLACE INTO slurm_jobs (slurm_id, job, tasks, state) VALUES (?, ?, ?, 'active')", path_);
+  s.bind(1, slurm_id).bind(2, static_cast<std::int64_t>(job)).bind(3, static_cast<std::int64_t>(tasks));
+  s.step();
+}
+
+void JobStore::end_slurm_job(const std::string& slurm_id) {
+  Stmt s(db_, "UPDATE slurm_jobs SET state = 'ended' WHERE slurm_id = ?", path_);
+  s.bind(1, slurm_id);
+  s.step();
+}
+
+std::vector<JobStore::SlurmRecord> JobStore::active_slurm_jobs() {
+  Stmt s(db_, "SELECT job, slurm_id, tasks FROM slurm_jobs WHERE state = 'active' ORDER BY slurm_id", path_);
+  std::vector<SlurmRecord> out;
+  while (s.step())
+    out.push_back({static_cast<std::uint64_t>(sqlite3_column_int64(s.get(), 0)), text(s.get(), 1),
+                   static_cast<int>(sqlite3_column_int64(s.get(), 2))});
+  return out;
+}
+
+std::size_t JobStore::count_slurm_jobs(std::uint64_t job) {
+  Stmt s(db_, "SELECT count(*) FROM slurm_jobs WHERE job = ?", path_);
+  s.bind(1, static_cast<std::int64_t>(job));
+  s.step();
+  return static_cast<std::size_t>(sqlite3_column_int64(s.get(), 0));
+}
+
+void JobStore::requeue_running_units() { exec("UPDATE units SET state = 'queued', owner = '' WHERE state = 'running'"); }
 
 }  // namespace omega::daemon

@@ -26,8 +26,24 @@ struct JobRecord {
   std::string sampler;     // empty: the scene's
   protocol::ProgressInfo progress;
   std::string message;  // why it failed
+  std::uint32_t workers = 0;   // > 0: rendered by `omega worker`s in units (omegad starts this many under Slurm)
+  std::uint64_t unit_spp = 0;  // samples per unit; 0: sized by the daemon (config unit_seconds)
 
   protocol::JobInfo info() const;
+};
+
+// A work unit of a worker job: samples [begin, end) of every pixel. queued -> running (owner:
+// the worker session) -> done (its part is on disk under the job's units/ folder). A running
+// unit whose worker goes away is queued again; a done unit never changes.
+enum class UnitState { queued, running, done };
+const char* to_string(UnitState s);
+struct UnitRecord {
+  std::uint64_t job = 0;
+  std::uint64_t unit = 0;
+  std::uint64_t begin = 0, end = 0;
+  UnitState state = UnitState::queued;
+  std::string owner;  // worker session name while running
+  double time_s = 0;  // render time of a done unit
 };
 
 class JobStore {
@@ -59,7 +75,25 @@ class JobStore {
                    const std::string& message = {});
   void set_priority(std::uint64_t id, std::int64_t p);
   void set_progress(std::uint64_t id, const protocol::ProgressInfo& p);
-  void remove(std::uint64_t id);
+  void remove(std::uint64_t id);  // and its units
+
+  // Work units (loop thread). units() by unit number; put_unit inserts or replaces one row.
+  std::vector<UnitRecord> units(std::uint64_t job);
+  void put_unit(const UnitRecord& u);
+  // At start-up: units that were running when the daemon died go back to the queue.
+  void requeue_running_units();
+
+  // Slurm jobs of worker jobs (executor slurm): recorded once sbatch returns their id, marked
+  // ended when squeue no longer lists them or omegad scancels them.
+  struct SlurmRecord {
+    std::uint64_t job = 0;
+    std::string slurm_id;
+    int tasks = 0;
+  };
+  void add_slurm_job(std::uint64_t job, const std::string& slurm_id, int tasks);
+  void end_slurm_job(const std::string& slurm_id);
+  std::vector<SlurmRecord> active_slurm_jobs();  // not ended, by slurm id
+  std::size_t count_slurm_jobs(std::uint64_t job);  // ever submitted for the job
 
   // How long a statement waits for a lock held elsewhere before failing (default 5000 ms).
   // While it waits, the loop thread is blocked; retries use a short one (QuickBusy).

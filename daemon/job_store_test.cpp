@@ -103,3 +103,37 @@ TEST(JobStore, SamplerOverrideIsKeptAndOldStoresGainTheColumn) {
 
 }  // namespace
 }  // namespace omega::daemon
+
+namespace omega::daemon {
+namespace {
+
+TEST(JobStore, UnitsAreKeptAndRunningOnesRequeuedAfterACrash) {
+  TempDir t;
+  std::string db = (t.p / "jobs.sqlite").string();
+  std::uint64_t id = 0;
+  {
+    JobStore s(db);
+    JobRecord r = rec("w", 0);
+    r.workers = 2;
+    r.unit_spp = 8;
+    id = s.insert(r, {});
+    s.put_unit(UnitRecord{id, 0, 0, 8, UnitState::done, "", 1.5});
+    s.put_unit(UnitRecord{id, 1, 8, 16, UnitState::running, "conn 3 (a)", 0});
+  }
+  JobStore s(db);  // as after kill -9: nothing else was written
+  EXPECT_EQ(s.get(id)->workers, 2u);
+  EXPECT_EQ(s.get(id)->unit_spp, 8u);
+  s.requeue_running_units();
+  auto u = s.units(id);
+  ASSERT_EQ(u.size(), 2u);
+  EXPECT_EQ(u[0].state, UnitState::done);
+  EXPECT_EQ(u[0].time_s, 1.5);
+  EXPECT_EQ(u[1].state, UnitState::queued);
+  EXPECT_EQ(u[1].owner, "");
+  EXPECT_EQ(u[1].begin, 8u);
+  s.remove(id);
+  EXPECT_TRUE(s.units(id).empty());
+}
+
+}  // namespace
+}  // namespace omega::daemon

@@ -120,6 +120,19 @@ void Server::recover_jobs() {
   for (const auto& e : fs::directory_iterator(cfg_.state_dir + "/jobs", ec))
     if (!known.count(e.path().filename().string())) fs::remove_all(e.path(), ec);
   for (const auto& e : fs::directory_iterator(cfg_.state_dir + "/staging", ec)) fs::remove_all(e.path(), ec);
+  // Worker jobs: units that were out when the daemon stopped are handed out again; the done ones
+  // are folded again from their files (server_workers.cpp).
+  store_->requeue_running_units();
+  for (const JobRecord& r : store_->all()) {
+    if (r.workers == 0 || r.state == protocol::JobState::done || r.state == protocol::JobState::failed ||
+        r.state == protocol::JobState::cancelled)
+      continue;
+    try {
+      load_work_job(r);
+    } catch (const std::exception& e) {
+      log_.error("job {}: cannot recover its work units: {}", r.id, e.what());
+    }
+  }
 }
 
 int Server::run() {
@@ -259,10 +272,13 @@ void Server::close_connection(std::uint64_t id, const std::string& why) {
   for (auto& [job, a] : active_) jobs.push_back(job);
   for (auto& [sid, p] : it->second->pending)
     if (!p.validating) log_.info("connection {}: submit {} abandoned before its assets arrived", id, sid);
+  release_worker_units(*it->second);  // its unfinished units go to other workers
+  const bool was_worker = it->second->worker.has_value();
   loop_.remove(it->second->fd());
   conns_.erase(it);
   dirty_.erase(id);
   for (auto job : jobs) update_watched(job);
+  if (was_worker) dispatch_work();
 }
 
 void Server::on_signal() {
@@ -331,6 +347,8 @@ void Server::maybe_finish_shutdown() {
 }
 
 void Server::sweep_timeouts() {
+  dispatch_work();  // units a store error kept back are retried here
+  poll_slurm();     // executor slurm: at most every slurm.poll_s
   const auto now = std::chrono::steady_clock::now();
   auto secs = [&](std::chrono::steady_clock::time_point t) { return std::chrono::duration<double>(now - t).count(); };
   std::vector<std::uint64_t> cut;

@@ -28,6 +28,7 @@
 #include "daemon/thread_share.h"
 #include "daemon/tile_publisher.h"
 #include "daemon/tls.h"
+#include "daemon/unit_fold.h"
 
 namespace omega::daemon {
 
@@ -127,6 +128,53 @@ class Server : public FrameSink {
   std::shared_ptr<const FilmSnapshot> latest_snapshot(std::uint64_t job);
   JobPaths paths(std::uint64_t job) const;
 
+  // server_workers.cpp: work units for `omega worker`s (loop thread). docs/farm.md "Workers".
+  struct WorkJob {
+    std::vector<UnitRecord> units;   // by unit number, as in the store
+    std::uint64_t target = 0;        // samples wanted: halt spp, or max_spp for time/error halts
+    std::uint64_t next_fold = 0;     // the first unit not yet handed to the fold
+    std::uint64_t fold_end = 0;      // samples [0, fold_end) are handed to the fold
+    bool finishing = false;          // halted: the result is being written
+    double base_elapsed_s = 0;       // elapsed before this daemon process took the job up
+    std::optional<std::chrono::steady_clock::time_point> started;  // first unit handed out here
+    std::shared_ptr<UnitFold> fold;  // background thread only (unit_fold.h)
+    std::string scene;               // the scene text, read once
+    std::vector<protocol::AssetRef> assets;
+    double spp_per_thread_s = 0;     // measured: samples per pixel per second and worker thread
+  };
+  bool is_worker_job(std::uint64_t job) const { return work_.count(job) > 0; }
+  void load_work_job(const JobRecord& r);  // at accept and at start-up
+  void on_work_request(Connection& c, const protocol::WorkRequest& m);
+  void on_asset_request(Connection& c, const protocol::AssetRequest& m);
+  void on_unit_result(Connection& c, protocol::UnitResult m);
+  void on_unit_stored(std::uint64_t conn, const protocol::UnitResult& m, const std::string& error);
+  // Hands units to the workers that wait for one: jobs by priority, then FIFO.
+  void dispatch_work();
+  bool assign_unit(Connection& c);  // true when a unit went out
+  // Units of the job's running set go back to the queue; their workers get unit_stop.
+  void stop_units(std::uint64_t job, const std::string& reason);
+  void release_worker_units(Connection& c);  // a worker left
+  void advance_fold(std::uint64_t job);
+  void on_fold(FoldUpdate u);
+  void finish_work_job(std::uint64_t job, const std::string& why);
+  void on_work_done(std::uint64_t job, std::uint64_t spp, const std::string& error);
+  protocol::JobInfo job_info(const JobRecord& r) const;  // with the workers of a worker job
+  // Whether a connection may take work: role worker, or an identity that may act on any job.
+  bool may_work(const Connection& c) const;
+  std::uint64_t unit_size(const JobRecord& r, const WorkJob& w, const Connection& c) const;
+  // server_slurm.cpp (executor slurm): every poll_s, squeue the workers omegad started; start
+  // them for worker jobs that have work and fewer live workers than they want; scancel them
+  // when a job ends, is paused or cancelled.
+  void poll_slurm();
+  void on_slurm_alive(const std::map<std::string, int>& alive, const std::string& error);
+  void start_slurm_workers(std::uint64_t job, int count);
+  void stop_slurm_workers(std::uint64_t job, const std::string& why);
+  bool needs_work(std::uint64_t job) const;
+  bool slurm_polling_ = false;
+  std::chrono::steady_clock::time_point next_slurm_poll_{};
+  std::map<std::uint64_t, int> slurm_started_;  // job -> workers started in this process
+  std::set<std::uint64_t> slurm_launching_;     // jobs with an sbatch under way
+
   std::string config_path_;
   std::function<void(Config&)> overrides_;
   Log& log_;
@@ -148,6 +196,7 @@ class Server : public FrameSink {
   TilePublisher publisher_{*this};
   std::map<std::uint64_t, Active> active_;
   std::map<std::uint64_t, Memo> memo_;
+  std::map<std::uint64_t, WorkJob> work_;  // unfinished worker jobs
   // The concurrency rule for all members above and below: the loop thread alone reads and writes
   // them (workers and the background thread only post closures to loop_), so no lock is taken.
   // Worker outcomes the store refused (e.g. "database is locked"): retried by retry_store(); the

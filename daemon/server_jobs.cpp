@@ -39,6 +39,7 @@ void Server::validate(Connection& c, std::uint64_t submit_id) {
       fs::create_directories(jp.files());
       write_file_atomic(jp.scene(), s.scene);
       for (const auto& a : s.assets) assets_->materialize(a.sha256, a.size, jp.files() + "/" + a.name);
+      write_file_atomic(jp.dir + "/assets.txt", format_asset_list(s.assets));  // for workers (unit_fold.h)
       SceneDesc desc = load_job_scene(jp, s.name, s.integrator.value_or(""), s.sampler.value_or(""), roots);
       std::uint64_t asset_bytes = 0;
       for (const auto& a : s.assets) asset_bytes += a.size;
@@ -107,6 +108,8 @@ void Server::on_validated(std::uint64_t conn, const protocol::Submit& s, Validat
   r.seed = s.seed;
   r.integrator = s.integrator.value_or("");
   r.sampler = s.sampler.value_or("");
+  r.workers = s.workers.value_or(static_cast<std::uint32_t>(cfg_.workers));
+  r.unit_spp = s.unit_spp.value_or(0);
   std::uint64_t job = 0;
   try {
     job = store_->insert(r, [&](std::uint64_t id) {
@@ -126,6 +129,16 @@ void Server::on_validated(std::uint64_t conn, const protocol::Submit& s, Validat
   a.job = job;
   c->send(protocol::encode(a));
   dirty_.insert(conn);
+  if (r.workers > 0) {
+    try {
+      r.id = job;
+      load_work_job(r);
+    } catch (const std::exception& e) {
+      log_.error("job {}: cannot prepare its work units: {}", job, e.what());
+    }
+    dispatch_work();
+    return;
+  }
   reschedule();
 }
 
@@ -157,6 +170,7 @@ void Server::reschedule_now() {
   std::map<std::uint64_t, JobRecord> by_id;
   for (const JobRecord& r : q) {
     if (active_.count(r.id)) continue;  // its previous worker is still stopping
+    if (r.workers > 0) continue;        // rendered by omega workers (server_workers.cpp)
     queued.push_back(SchedJob{r.id, r.priority});
     by_id.emplace(r.id, r);
   }

@@ -101,6 +101,7 @@ void Server::on_auth(Connection& c, const protocol::DecodedFrame& f) {
   }
   c.user = a->user;
   c.authenticated = true;
+  c.worker_role = cfg_.worker_users.count(c.user) > 0;
   c.nonce.clear();
   c.send(protocol::encode(protocol::Ok{f.id}));
   log_.info("connection {} ({}): authenticated as '{}'", c.id(), c.peer().name, c.user);
@@ -187,6 +188,14 @@ void Server::handle_frame(Connection& c, protocol::DecodedFrame& f) {
 }
 
 void Server::dispatch(Connection& c, const protocol::DecodedFrame& f, protocol::Message& m) {
+  if (c.worker_role && !std::holds_alternative<protocol::Ping>(m) && !std::holds_alternative<protocol::Pong>(m) &&
+      !std::holds_alternative<protocol::Bye>(m) && !std::holds_alternative<protocol::WorkRequest>(m) &&
+      !std::holds_alternative<protocol::AssetRequest>(m) && !std::holds_alternative<protocol::UnitResult>(m)) {
+    log_.warn("connection {} ({}): '{}' from worker {} refused", c.id(), c.peer().name, protocol::to_string(f.type), c.user);
+    return reply_error(c, f.id, ErrorCode::permission_denied,
+                       std::string(protocol::to_string(f.type)) + ": " + c.user +
+                           " is a worker: it may only take work units and their assets");
+  }
   std::visit(
       [&](auto& msg) {
         using T = std::decay_t<decltype(msg)>;
@@ -204,7 +213,7 @@ void Server::dispatch(Connection& c, const protocol::DecodedFrame& f, protocol::
         } else if constexpr (std::is_same_v<T, protocol::List>) {
           protocol::JobList l;
           l.id = msg.id;
-          for (const JobRecord& r : store_->all()) l.jobs.push_back(r.info());
+          for (const JobRecord& r : store_->all()) l.jobs.push_back(job_info(r));
           c.send(protocol::encode(l));
         } else if constexpr (std::is_same_v<T, protocol::SetPriority>) {
           on_job_request(c, MessageType::set_priority, msg.id, msg.job, msg.priority);
@@ -219,6 +228,14 @@ void Server::dispatch(Connection& c, const protocol::DecodedFrame& f, protocol::
           c.send(protocol::encode(protocol::Ok{msg.id}));
         } else if constexpr (std::is_same_v<T, protocol::Fetch>) {
           on_fetch(c, msg.id, msg.job);
+        } else if constexpr (std::is_same_v<T, protocol::WorkRequest>) {
+          on_work_request(c, msg);
+        } else if constexpr (std::is_same_v<T, protocol::AssetRequest>) {
+          if (!may_work(c)) return reply_error(c, msg.id, ErrorCode::permission_denied, "asset_request: not a worker");
+          on_asset_request(c, msg);
+        } else if constexpr (std::is_same_v<T, protocol::UnitResult>) {
+          if (!may_work(c)) return reply_error(c, msg.id, ErrorCode::permission_denied, "unit_result: not a worker");
+          on_unit_result(c, std::move(msg));
         } else if constexpr (std::is_same_v<T, protocol::Hello>) {
           reply_error(c, msg.id, ErrorCode::bad_request, "hello: the session is already open");
         } else if constexpr (std::is_same_v<T, protocol::Auth>) {
@@ -330,7 +347,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
   if (t == MessageType::status) {
     protocol::JobInfoReply reply;
     reply.id = id;
-    reply.info = r->info();
+    reply.info = job_info(*r);
     c.send(protocol::encode(reply));
     return;
   }
@@ -349,6 +366,11 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
       if (finished(r->state)) return bad_state();
       store_->set_state(job, JobState::cancelled);
       if (live) running->second.worker->request_stop(StopKind::cancel);
+      if (is_worker_job(job)) {
+        stop_units(job, "cancelled");
+        work_.erase(job);
+        stop_slurm_workers(job, "cancelled");
+      }
       publisher_.done(job, JobState::cancelled, r->progress, std::nullopt);
       log_.info("job {}: cancelled by {}", job, c.user);
       break;
@@ -356,6 +378,10 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
       if (r->state != JobState::queued && r->state != JobState::running) return bad_state();
       store_->set_state(job, JobState::paused);
       if (live) running->second.worker->request_stop(StopKind::pause);
+      if (is_worker_job(job)) {
+        stop_units(job, "paused");
+        stop_slurm_workers(job, "paused");  // resume starts them again (server_slurm.cpp)
+      }
       publisher_.progress(job, JobState::paused, r->progress);
       log_.info("job {}: paused by {}", job, c.user);
       break;
@@ -363,6 +389,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
       if (r->state != JobState::paused) return bad_state();
       store_->set_state(job, JobState::queued);
       publisher_.progress(job, JobState::queued, r->progress);
+      next_slurm_poll_ = {};  // executor slurm: its workers start again at the next tick
       log_.info("job {}: resumed by {}", job, c.user);
       break;
     case MessageType::set_priority:
@@ -374,6 +401,11 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
     case MessageType::delete_job: {
       if (live) return reply_error(c, id, ErrorCode::invalid_state, "delete: job " + std::to_string(job) + " is still stopping; cancel it and retry");
       if (!finished(r->state)) publisher_.done(job, JobState::cancelled, r->progress, std::string("deleted"));
+      if (is_worker_job(job)) {
+        stop_units(job, "deleted");
+        work_.erase(job);
+        stop_slurm_workers(job, "deleted");
+      }
       store_->remove(job);
       std::error_code ec;
       fs::remove_all(paths(job).dir, ec);
@@ -387,6 +419,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
   }
   c.send(protocol::encode(protocol::Ok{id}));
   reschedule();
+  dispatch_work();  // a resumed or re-prioritised worker job
 }
 
 void Server::on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job) {

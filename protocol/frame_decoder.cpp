@@ -15,6 +15,8 @@ std::array<std::uint64_t, kMessageTypeCount> DecoderLimits::default_type_limits(
   a[static_cast<std::size_t>(MessageType::asset)] = 1ull << 30;
   a[static_cast<std::size_t>(MessageType::tile)] = 16ull << 20;
   a[static_cast<std::size_t>(MessageType::image)] = 1ull << 30;
+  a[static_cast<std::size_t>(MessageType::work_unit)] = 64ull << 20;   // a scene, as submit
+  a[static_cast<std::size_t>(MessageType::unit_result)] = 1ull << 30;  // a part, as image
   return a;
 }
 

@@ -28,7 +28,8 @@ struct DecoderLimits {
     max_payload_for_type[static_cast<std::size_t>(t)] = n;
   }
   std::uint64_t payload_limit(MessageType t) const;
-  // submit 64 MiB, asset 1 GiB, tile 16 MiB, image 1 GiB; 0 for types without payload.
+  // submit and work_unit 64 MiB, asset, image and unit_result 1 GiB, tile 16 MiB; 0 for types
+  // without payload.
   static std::array<std::uint64_t, kMessageTypeCount> default_type_limits();
 };
 

@@ -11,6 +11,7 @@ constexpr std::array<std::string_view, kMessageTypeCount> kNames{
     "status", "job_info", "list", "job_list",
     "cancel", "pause", "resume", "set_priority", "delete",
     "subscribe", "unsubscribe", "tile", "progress", "done", "fetch", "image",
+    "work_request", "work_unit", "asset_request", "unit_result", "unit_stop",
 };
 }  // namespace
 
@@ -24,7 +25,7 @@ std::optional<MessageType> message_type_from_string(std::string_view s) {
 
 bool carries_payload(MessageType t) {
   return t == MessageType::submit || t == MessageType::asset || t == MessageType::tile ||
-         t == MessageType::image;
+         t == MessageType::image || t == MessageType::work_unit || t == MessageType::unit_result;
 }
 
 }  // namespace omega::protocol

@@ -12,8 +12,9 @@ enum class MessageType {
   status, job_info, list, job_list,
   cancel, pause, resume, set_priority, delete_job,
   subscribe, unsubscribe, tile, progress, done, fetch, image,
+  work_request, work_unit, asset_request, unit_result, unit_stop,
 };
-inline constexpr std::size_t kMessageTypeCount = static_cast<std::size_t>(MessageType::image) + 1;
+inline constexpr std::size_t kMessageTypeCount = static_cast<std::size_t>(MessageType::unit_stop) + 1;
 
 std::string_view to_string(MessageType t);
 std::optional<MessageType> message_type_from_string(std::string_view s);

@@ -35,6 +35,11 @@ template <> constexpr MessageType type_for<Delete>() { return Delete::kType; }
 template <> constexpr MessageType type_for<Subscribe>() { return Subscribe::kType; }
 template <> constexpr MessageType type_for<Unsubscribe>() { return Unsubscribe::kType; }
 template <> constexpr MessageType type_for<Fetch>() { return Fetch::kType; }
+template <> constexpr MessageType type_for<WorkRequest>() { return MessageType::work_request; }
+template <> constexpr MessageType type_for<WorkUnit>() { return MessageType::work_unit; }
+template <> constexpr MessageType type_for<AssetRequest>() { return MessageType::asset_request; }
+template <> constexpr MessageType type_for<UnitResult>() { return MessageType::unit_result; }
+template <> constexpr MessageType type_for<UnitStop>() { return MessageType::unit_stop; }
 
 // The variant's alternatives appear in MessageType order, which lets decode_message find the
 // alternative by index. Checked here at compile time.

@@ -34,6 +34,8 @@ inline constexpr std::size_t kMaxJobsListed = 100000;
 inline constexpr std::int64_t kMinPriority = -1000;
 inline constexpr std::int64_t kMaxPriority = 1000;
 inline constexpr std::size_t kNonceBytes = 32;
+inline constexpr std::uint64_t kMaxWorkers = 100000;  // a job's `workers`, and workers listed in job_info
+inline constexpr std::uint64_t kMaxWorkerThreads = 4096;
 
 enum class AuthMethod { none, peer, hmac_sha256 };
 enum class JobState { queued, running, paused, done, failed, cancelled };
@@ -114,6 +116,10 @@ struct Submit {
   std::optional<std::string> sampler;  // "sobol" | "independent": overrides the scene's
   std::vector<AssetRef> assets;
   std::string scene;  // payload: the scene YAML
+  // Render on connected `omega worker`s instead of the daemon's own threads (docs/farm.md):
+  // > 0: the workers omegad starts (executor slurm); absent: the daemon's default (config `workers`).
+  std::optional<std::uint32_t> workers;
+  std::optional<std::uint64_t> unit_spp;  // samples per work unit; absent: sized to ~unit_seconds
   bool operator==(const Submit&) const = default;
 };
 struct NeedAssets {
@@ -140,6 +146,14 @@ struct ProgressInfo {
   double samples_per_s = 0;
   bool operator==(const ProgressInfo&) const = default;
 };
+// One `omega worker` session that holds or held units of a job (job_info of a worker job).
+struct WorkerInfo {
+  std::string name;               // the worker's own name (host:pid), then its connection
+  std::uint64_t units_done = 0;   // units of this job it finished in this session
+  std::vector<std::string> units; // the ranges it renders now, "A:B"
+  double samples_per_s = 0;       // pixel samples per second of its last unit
+  bool operator==(const WorkerInfo&) const = default;
+};
 struct JobInfo {
   std::uint64_t job = 0;
   std::string name;
@@ -148,6 +162,7 @@ struct JobInfo {
   std::string owner;
   Halt halt;
   ProgressInfo progress;
+  std::vector<WorkerInfo> workers;  // a worker job's workers; absent (empty) for local jobs
   bool operator==(const JobInfo&) const = default;
 };
 struct Status {
@@ -232,10 +247,61 @@ struct Image {
   bool operator==(const Image&) const = default;
 };
 
+// ---- workers (omega worker; docs/protocol.md "Workers") ----
+// worker -> daemon: give me a unit. The daemon answers with work_unit when it has one (it may
+// hold the request for as long as it has none); one request outstanding per connection.
+struct WorkRequest {
+  std::uint64_t id = 0;
+  std::uint32_t threads = 1;
+  std::string name;  // free text: host and pid, shown by `omega status`
+  bool operator==(const WorkRequest&) const = default;
+};
+// daemon -> worker (echoes the work_request): render samples [begin, end) of the job's scene.
+struct WorkUnit {
+  std::uint64_t id = 0;
+  std::uint64_t job = 0;
+  std::uint64_t unit = 0;  // the unit's number within the job
+  std::uint64_t begin = 0, end = 0;
+  std::uint64_t seed = 0;
+  std::string name;  // scene name (the scene is parsed as NAME.yaml among its assets)
+  std::optional<std::string> integrator;
+  std::optional<std::string> sampler;
+  std::vector<AssetRef> assets;
+  std::string scene;  // payload: the scene YAML
+  bool operator==(const WorkUnit&) const = default;
+};
+// worker -> daemon: the bytes of an asset of a job it holds a unit of; answered by `asset`.
+struct AssetRequest {
+  std::uint64_t id = 0;
+  std::uint64_t job = 0;
+  std::string sha256;
+  bool operator==(const AssetRequest&) const = default;
+};
+// worker -> daemon: a finished unit; payload: the part (omega render --samples A:B's EXR).
+struct UnitResult {
+  std::uint64_t id = 0;
+  std::uint64_t job = 0;
+  std::uint64_t unit = 0;
+  std::uint64_t begin = 0, end = 0;
+  double time_s = 0;
+  double samples_per_s = 0;
+  std::string part;  // payload
+  bool operator==(const UnitResult&) const = default;
+};
+// daemon -> worker: stop rendering that unit (cancel, pause, halt); it is not wanted any more.
+struct UnitStop {
+  std::uint64_t id = 0;
+  std::uint64_t job = 0;
+  std::uint64_t unit = 0;
+  std::string reason;
+  bool operator==(const UnitStop&) const = default;
+};
+
 using Message = std::variant<Hello, Welcome, Auth, Ok, Error, Ping, Pong, Bye, Submit, NeedAssets,
                              Asset, Accepted, Status, JobInfoReply, List, JobList, Cancel, Pause,
                              Resume, SetPriority, Delete, Subscribe, Unsubscribe, Tile, Progress,
-                             Done, Fetch, Image>;
+                             Done, Fetch, Image, WorkRequest, WorkUnit, AssetRequest, UnitResult,
+                             UnitStop>;
 
 MessageType type_of(const Message& m);
 std::uint64_t id_of(const Message& m);
@@ -264,6 +330,11 @@ Frame encode(const Tile&);
 Frame encode(const Progress&);
 Frame encode(const Done&);
 Frame encode(const Image&);
+Frame encode(const WorkRequest&);
+Frame encode(const WorkUnit&);
+Frame encode(const AssetRequest&);
+Frame encode(const UnitResult&);
+Frame encode(const UnitStop&);
 Frame encode(const Message&);
 
 // Decoders. decode_message dispatches on the frame's type; decode<T> expects that type.
@@ -328,6 +399,16 @@ template <>
 Result<Fetch, DecodeError> decode<Fetch>(const DecodedFrame& f);
 template <>
 Result<Image, DecodeError> decode<Image>(const DecodedFrame& f);
+template <>
+Result<WorkRequest, DecodeError> decode<WorkRequest>(const DecodedFrame& f);
+template <>
+Result<WorkUnit, DecodeError> decode<WorkUnit>(const DecodedFrame& f);
+template <>
+Result<AssetRequest, DecodeError> decode<AssetRequest>(const DecodedFrame& f);
+template <>
+Result<UnitResult, DecodeError> decode<UnitResult>(const DecodedFrame& f);
+template <>
+Result<UnitStop, DecodeError> decode<UnitStop>(const DecodedFrame& f);
 extern template Frame encode(const JobRequest<MessageType::cancel>&);
 extern template Frame encode(const JobRequest<MessageType::pause>&);
 extern template Frame encode(const JobRequest<MessageType::resume>&);

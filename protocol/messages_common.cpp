@@ -83,6 +83,31 @@ void write_job_info_fields(HeaderWriter& w, const JobInfo& j) {
   write_halt(w, j.halt);
   w.key("progress");
   write_progress(w, j.progress);
+  if (!j.workers.empty()) write_worker_infos(w, j.workers);  // local jobs: as before
+}
+
+void write_worker_infos(HeaderWriter& w, const std::vector<WorkerInfo>& ws) {
+  w.key("workers").begin_list();
+  for (const WorkerInfo& i : ws) {
+    w.begin_map().field("name", i.name).field_u("units_done", i.units_done).key("units").begin_list();
+    for (const std::string& u : i.units) w.str(u);
+    w.end_list().field_f("samples_per_s", i.samples_per_s).end_map();
+  }
+  w.end_list();
+}
+
+std::vector<WorkerInfo> read_worker_infos(FieldReader& r) {
+  std::vector<WorkerInfo> out;
+  if (!r.has("workers")) return out;
+  for (FieldReader& f : r.map_list("workers", kMaxWorkers)) {
+    WorkerInfo i;
+    i.name = f.str("name", kMaxNameBytes);
+    i.units_done = f.u64("units_done");
+    i.units = f.str_list("units", 1024, 64);
+    i.samples_per_s = f.f64("samples_per_s", 0, kHuge);
+    out.push_back(std::move(i));
+  }
+  return out;
 }
 
 Halt read_halt(FieldReader& r) {
@@ -124,6 +149,7 @@ JobInfo read_job_info_fields(FieldReader& r) {
   j.owner = r.str("owner", kMaxNameBytes);
   j.halt = read_halt(r);
   j.progress = read_progress(r);
+  j.workers = read_worker_infos(r);
   return j;
 }
 

@@ -23,6 +23,13 @@ ProgressInfo read_progress(FieldReader& r);
 JobState read_job_state(FieldReader& r, std::string_view key);
 JobInfo read_job_info_fields(FieldReader& r);
 std::string read_sha256(FieldReader& r, std::string_view key);
+// The asset list of submit and work_unit (safe relative names, no duplicates).
+void write_assets(HeaderWriter& w, const std::vector<AssetRef>& assets);
+std::vector<AssetRef> read_assets(FieldReader& r);
+// An optional integrator/sampler name: [a-z0-9_], at most 64 bytes.
+std::optional<std::string> read_identifier(FieldReader& r, std::string_view key);
+void write_worker_infos(HeaderWriter& w, const std::vector<WorkerInfo>& ws);
+std::vector<WorkerInfo> read_worker_infos(FieldReader& r);
 
 template <class T>
 Result<T, DecodeError> finish_decode(FieldReader& r, T&& value) {

@@ -45,11 +45,47 @@ Frame encode(const Submit& m) {
   w.field_u("seed", m.seed);
   if (m.integrator) w.field("integrator", *m.integrator);
   if (m.sampler) w.field("sampler", *m.sampler);  // absent: the scene's (older clients send none)
+  detail::write_assets(w, m.assets);
+  if (m.workers) w.field_u("workers", *m.workers);  // absent: a local job (older clients send none)
+  if (m.unit_spp) w.field_u("unit_spp", *m.unit_spp);
+  return finish(w, m.scene);
+}
+
+void detail::write_assets(HeaderWriter& w, const std::vector<AssetRef>& assets) {
   w.key("assets").begin_list();
-  for (const AssetRef& a : m.assets)
+  for (const AssetRef& a : assets)
     w.begin_map().field("name", a.name).field("sha256", a.sha256).field_u("size", a.size).end_map();
   w.end_list();
-  return finish(w, m.scene);
+}
+
+std::optional<std::string> detail::read_identifier(FieldReader& r, std::string_view key) {
+  std::optional<std::string> v = r.opt_str(key, 64);
+  if (r.ok() && v && !is_identifier(*v)) r.fail(DecodeError::invalid_value, r.path_of(key), "expected a name of [a-z0-9_]");
+  return v;
+}
+
+std::vector<AssetRef> detail::read_assets(FieldReader& r) {
+  std::vector<AssetRef> out;
+  std::set<std::string> names;
+  for (FieldReader& a : r.map_list("assets", kMaxAssets)) {
+    AssetRef ref;
+    ref.name = a.str("name", kMaxNameBytes);
+    if (a.ok() && !is_safe_asset_name(ref.name))
+      a.fail(DecodeError::invalid_value, a.path_of("name"),
+             "must be a relative path of at most 1024 bytes without '.', '..' or empty components, each at most 255 bytes");
+    if (a.ok() && !names.insert(ref.name).second)
+      a.fail(DecodeError::invalid_value, a.path_of("name"), "'" + ref.name + "' is listed twice");
+    ref.sha256 = detail::read_sha256(a, "sha256");
+    ref.size = a.u64("size");
+    out.push_back(std::move(ref));
+  }
+  // A name that is also another's folder ("a" and "a/b.obj") cannot be both a file and a folder.
+  for (const std::string& n : names) {
+    auto it = names.lower_bound(n + "/");
+    if (r.ok() && it != names.end() && it->compare(0, n.size() + 1, n + "/") == 0)
+      r.fail(DecodeError::invalid_value, "assets", "'" + n + "' is both an asset and the folder of '" + *it + "'");
+  }
+  return out;
 }
 
 template <>
@@ -62,31 +98,11 @@ Result<Submit, DecodeError> decode<Submit>(const DecodedFrame& f) {
   m.priority = r.i64("priority", kMinPriority, kMaxPriority);
   m.halt = detail::read_halt(r);
   m.seed = r.u64("seed");
-  m.integrator = r.opt_str("integrator", 64);
-  if (r.ok() && m.integrator && !is_identifier(*m.integrator))
-    r.fail(DecodeError::invalid_value, "integrator", "expected a name of [a-z0-9_]");
-  m.sampler = r.opt_str("sampler", 64);
-  if (r.ok() && m.sampler && !is_identifier(*m.sampler))
-    r.fail(DecodeError::invalid_value, "sampler", "expected a name of [a-z0-9_]");
-  std::set<std::string> names;
-  for (FieldReader& a : r.map_list("assets", kMaxAssets)) {
-    AssetRef ref;
-    ref.name = a.str("name", kMaxNameBytes);
-    if (a.ok() && !is_safe_asset_name(ref.name))
-      a.fail(DecodeError::invalid_value, a.path_of("name"),
-             "must be a relative path of at most 1024 bytes without '.', '..' or empty components, each at most 255 bytes");
-    if (a.ok() && !names.insert(ref.name).second)
-      a.fail(DecodeError::invalid_value, a.path_of("name"), "'" + ref.name + "' is listed twice");
-    ref.sha256 = detail::read_sha256(a, "sha256");
-    ref.size = a.u64("size");
-    m.assets.push_back(std::move(ref));
-  }
-  // A name that is also another's folder ("a" and "a/b.obj") cannot be both a file and a folder.
-  for (const std::string& n : names) {
-    auto it = names.lower_bound(n + "/");
-    if (r.ok() && it != names.end() && it->compare(0, n.size() + 1, n + "/") == 0)
-      r.fail(DecodeError::invalid_value, "assets", "'" + n + "' is both an asset and the folder of '" + *it + "'");
-  }
+  m.integrator = detail::read_identifier(r, "integrator");
+  m.sampler = detail::read_identifier(r, "sampler");
+  m.assets = detail::read_assets(r);
+  if (r.has("workers")) m.workers = static_cast<std::uint32_t>(r.u64("workers", 0, kMaxWorkers));
+  m.unit_spp = r.opt_u64("unit_spp", 1, 1ull << 40);
   m.scene = f.payload;
   return finish_decode(r, std::move(m));
 }

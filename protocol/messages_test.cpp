@@ -165,3 +165,36 @@ TEST(Version, Negotiation) {
 TEST(Auth, SignedTextLayout) {
   EXPECT_EQ(auth_signed_text("00ff", "alice"), "omega-auth-v1\n00ff\nalice");
 }
+
+TEST(Messages, WorkerMessagesCheckTheirFields) {
+  // A unit's range must be non-empty; threads at least 1; worker lists only in job fields.
+  EXPECT_EQ(code_of(R"({"type": "unit_result", "id": 1, "job": 1, "unit": 0, "begin": 4, "end": 4, "time_s": 0, "samples_per_s": 0})"),
+            DecodeError::invalid_value);
+  EXPECT_EQ(code_of(R"({"type": "work_request", "id": 1, "threads": 0, "name": ""})"), DecodeError::out_of_range);
+  EXPECT_EQ(code_of(R"({"type": "asset_request", "id": 1, "job": 1, "sha256": "abc"})"), DecodeError::invalid_value);
+  // unit_result and work_unit carry payloads; unit_stop none.
+  EXPECT_TRUE(carries_payload(MessageType::unit_result));
+  EXPECT_TRUE(carries_payload(MessageType::work_unit));
+  EXPECT_FALSE(carries_payload(MessageType::unit_stop));
+}
+
+TEST(Messages, SubmitWorkersAndJobInfoWorkersRoundTrip) {
+  Submit s;
+  s.id = 3;
+  s.workers = 4;
+  s.unit_spp = 32;
+  auto m = decode<Submit>(through_decoder(encode(s)));
+  ASSERT_TRUE(m.ok()) << m.message();
+  EXPECT_EQ(*m, s);
+  s.workers.reset();
+  s.unit_spp.reset();
+  EXPECT_EQ(encode(s).header.find("workers"), std::string::npos) << "a local job's submit is as before";
+  JobInfoReply r;
+  r.id = 2;
+  r.info.job = 9;
+  r.info.workers.push_back(WorkerInfo{"conn 4 (node1:77)", 3, {"96:128"}, 2.5e6});
+  r.info.workers.push_back(WorkerInfo{"conn 5 (node2:78)", 0, {}, 0});
+  auto j = decode<JobInfoReply>(through_decoder(encode(r)));
+  ASSERT_TRUE(j.ok()) << j.message();
+  EXPECT_EQ(*j, r);
+}

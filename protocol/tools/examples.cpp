@@ -80,6 +80,24 @@ std::vector<Example> all() {
   v.push_back({"done", Done{13, 42, JobState::done, sample_progress(false), std::nullopt}});
   v.push_back({"fetch", Fetch{15, 42}});
   v.push_back({"image", Image{15, 42, 3, 12, 512, 512, kExr}});
+  v.push_back({"work_request", WorkRequest{1, 4, "node17:4242"}});
+  {
+    WorkUnit u;
+    u.id = 1;
+    u.job = 42;
+    u.unit = 3;
+    u.begin = 48;
+    u.end = 64;
+    u.seed = 7;
+    u.name = "bunny";
+    u.integrator = "bdpt";
+    u.assets.push_back(AssetRef{"meshes/tri.obj", kMeshSha, kMesh.size()});
+    u.scene = "omega: 1\nshapes:\n  - {type: mesh, file: meshes/tri.obj}\n";
+    v.push_back({"work_unit", u});
+  }
+  v.push_back({"asset_request", AssetRequest{2, 42, kMeshSha}});
+  v.push_back({"unit_result", UnitResult{3, 42, 3, 48, 64, 2.5, 1.2e6, kExr}});
+  v.push_back({"unit_stop", UnitStop{0, 42, 3, "cancelled"}});
   return v;
 }
 

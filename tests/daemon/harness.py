@@ -28,7 +28,7 @@ def small_cornell(width=80, height=48, spp=16):
 
 
 class Daemon:
-    def __init__(self, workdir, threads=2, config="", state_dir=None, name="omegad"):
+    def __init__(self, workdir, threads=2, config="", state_dir=None, name="omegad", tcp_port=0):
         self.workdir = workdir
         self.state_dir = state_dir or os.path.join(workdir, "state")
         self.sock = os.path.join(workdir, name + ".sock")
@@ -37,6 +37,7 @@ class Daemon:
         with open(self.config_path, "w") as f:
             f.write(base + config)
         self.threads = threads
+        self.tcp_port = tcp_port  # 0: any free port; a fixed one lets clients reconnect after a restart
         self.lines = []
         self.lock = threading.Lock()
         self.proc = None
@@ -49,7 +50,7 @@ class Daemon:
     def start(self, timeout=30):
         self.lines = []
         args = [OMEGAD, "--config", self.config_path, "--state-dir", self.state_dir,
-                "--listen", self.unix, "--listen", "tcp:127.0.0.1:0", "--threads", str(self.threads)]
+                "--listen", self.unix, "--listen", f"tcp:127.0.0.1:{self.tcp_port}", "--threads", str(self.threads)]
         self.proc = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
         threading.Thread(target=self._pump, args=(self.proc,), daemon=True).start()
         m = self.wait_log(r"omegad ready: listening on .*tcp:([0-9.]+:\d+)", timeout)
@@ -100,6 +101,14 @@ class Daemon:
         if self.proc and self.proc.poll() is None:
             self.proc.send_signal(signal.SIGKILL)
             self.proc.wait(10)
+
+
+def free_port():
+    """A loopback TCP port that was free a moment ago."""
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 def local_render(scene_bytes, out, spp, seed=0, workdir=None, integrator=None):

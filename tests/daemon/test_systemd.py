@@ -8,7 +8,7 @@ import subprocess
 import sys
 import time
 
-from harness import OMEGAD, Daemon, Test, op, small_cornell, wait_state
+from harness import OMEGA, OMEGAD, Daemon, Test, op, small_cornell, wait_state
 
 UNITS = sys.argv[5] if len(sys.argv) > 5 else None
 
@@ -25,6 +25,14 @@ def test_units_verify(tmp, daemons):
             f.write(text)
     r = subprocess.run([tool, "verify", os.path.join(tmp, "omegad.service"), os.path.join(tmp, "omegad.socket")],
                        capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stdout + r.stderr
+    # The worker's unit (docs/farm.md "Workers"), with ExecStart at the built omega.
+    with open(os.path.join(UNITS, "omega-worker.service")) as f:
+        text = f.read().replace("/usr/bin/omega ", OMEGA + " ")
+    with open(os.path.join(tmp, "omega-worker.service"), "w") as f:
+        f.write(text)
+    r = subprocess.run([tool, "verify", os.path.join(tmp, "omega-worker.service")], capture_output=True, text=True,
+                       timeout=60)
     assert r.returncode == 0, r.stdout + r.stderr
     text = open(os.path.join(UNITS, "omegad.service")).read()
     for key in ("Type=notify", "WatchdogSec=", "StateDirectory=omega", "RuntimeDirectory=omega", "NoNewPrivileges=yes",

@@ -70,6 +70,14 @@ def examples():
         ("fetch", op.job_request("fetch", 15, 42)),
         ("image", op.encode_frame({"type": "image", "id": 15, "job": 42, "pass": 3, "spp": 12, "width": 512,
                                    "height": 512}, EXR)),
+        ("work_request", op.encode_frame({"type": "work_request", "id": 1, "threads": 4, "name": "node17:4242"})),
+        ("work_unit", op.encode_frame({"type": "work_unit", "id": 1, "job": 42, "unit": 3, "begin": 48, "end": 64,
+                                       "seed": 7, "name": "bunny", "integrator": "bdpt",
+                                       "assets": [op.asset_ref("meshes/tri.obj", sha, len(MESH))]}, SCENE)),
+        ("asset_request", op.encode_frame({"type": "asset_request", "id": 2, "job": 42, "sha256": sha})),
+        ("unit_result", op.encode_frame({"type": "unit_result", "id": 3, "job": 42, "unit": 3, "begin": 48, "end": 64,
+                                         "time_s": 2.5, "samples_per_s": 1.2e6}, EXR)),
+        ("unit_stop", op.encode_frame({"type": "unit_stop", "id": 0, "job": 42, "unit": 3, "reason": "cancelled"})),
     ]
 
 

@@ -1,0 +1,150 @@
+"""omegad with `executor: slurm` (docs/farm.md "Workers under Slurm") on a real single-host Slurm
+cluster (tests/support/slurm_cluster.py): a job with `workers: 2` makes omegad sbatch a 2-task
+array of `omega worker`s, recorded in its SQLite store; one more worker is started by hand and
+kill -9'ed mid-unit. The result must equal `omega merge` of the same units rendered locally bit
+for bit (and `omega render --spp N` within 1e-6), units must have been rendered by the Slurm
+workers, a Slurm worker that Slurm ends (scancel of its task) must be replaced while the job has
+work left, and omegad must scancel its Slurm jobs when the job is done.
+Usage: test_daemon_slurm.py OMEGAD OMEGA EXR_COMPARE SOURCE_DIR. Fails (never skips) when Slurm
+cannot run, with the reason."""
+import os
+import re
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "support"))
+sys.path.insert(0, os.path.join(HERE, "..", "daemon"))
+from slurm_cluster import SlurmCluster, SlurmUnavailable  # noqa: E402
+from harness import EXR_COMPARE, OMEGA, SLOWDOWN, Daemon, Test, free_port, small_cornell  # noqa: E402
+
+ALICE, WORKER = "alice-token-0123456789", "worker-token-0123456789"
+SANITIZED = bool(os.environ.get("OMEGA_SANITIZER"))
+W, H, UNIT, UNITS = (48, 32, 8, 12) if SANITIZED else (160, 120, 48, 14)
+SPP = UNIT * UNITS
+
+
+def omega(args, e, check=True):
+    r = subprocess.run([OMEGA] + args, env=e, capture_output=True, text=True, timeout=120)
+    if check and r.returncode != 0:
+        raise AssertionError(f"omega {' '.join(args)} exited {r.returncode}: {r.stderr}")
+    return r
+
+
+def wait_file(path, pattern, timeout):
+    deadline = time.monotonic() + timeout * SLOWDOWN
+    while time.monotonic() < deadline:
+        with open(path) as f:
+            m = re.search(pattern, f.read())
+        if m:
+            return m
+        time.sleep(0.02)
+    with open(path) as f:
+        raise AssertionError(f"{path}: no /{pattern}/ within {timeout * SLOWDOWN} s:\n{f.read()[-3000:]}")
+
+
+def test_slurm_workers(tmp, daemons):
+    with SlurmCluster() as cluster:
+        os.environ["SLURM_CONF"] = cluster.conf  # omegad runs sbatch, squeue and scancel with it
+        token = os.path.join(tmp, "farm.token")
+        fd = os.open(token, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        os.write(fd, (WORKER + "\n").encode())
+        os.close(fd)
+        port = free_port()
+        addr = f"tcp:127.0.0.1:{port}"
+        config = f"""tcp_users:
+  alice: {ALICE}
+  farm: {{token_file: {token}, role: worker}}
+executor: slurm
+slurm:
+  omega: {OMEGA}
+  connect: {addr}
+  user: farm
+  token_file: {token}
+  threads: 1
+  poll_s: 1
+  idle_exit_s: 30
+"""
+        d = Daemon(tmp, config=config, tcp_port=port, threads=1).start()
+        daemons.append(d)
+        scene = os.path.join(tmp, "scene.yaml")
+        with open(scene, "wb") as f:
+            f.write(small_cornell(W, H, SPP))
+        alice = dict(os.environ, OMEGA_HOST=addr, OMEGA_USER="alice", OMEGA_TOKEN=ALICE)
+        job = int(omega(["submit", scene, "--spp", str(SPP), "--workers", "2", "--unit-spp", str(UNIT), "-q"],
+                        alice).stdout.split()[-1])
+        m = d.wait_log(rf"job {job}: Slurm job (\d+): 2 worker\(s\) submitted", 30)
+        slurm_id = m.group(1)
+        db = sqlite3.connect(os.path.join(d.state_dir, "jobs.sqlite"))
+        rows = db.execute("SELECT job, tasks FROM slurm_jobs WHERE slurm_id = ?", (slurm_id,)).fetchall()
+        db.close()
+        assert rows == [(job, 2)], rows
+        # The script Slurm runs names the token file, never the token.
+        script = open(os.path.join(d.state_dir, "slurm", f"job-{job}.sh")).read()
+        assert WORKER not in script and token in script, script
+
+        # One worker by hand, kill -9'ed in the middle of its second unit.
+        log = os.path.join(tmp, "worker-hand.log")
+        with open(log, "w") as lf:
+            hand = subprocess.Popen([OMEGA, "worker", "--connect", addr, "--threads", "1", "--name", "hand",
+                                     "--cache", os.path.join(tmp, "cache-hand")],
+                                    env=dict(os.environ, OMEGA_USER="farm", OMEGA_TOKEN_FILE=token),
+                                    stdout=subprocess.DEVNULL, stderr=lf)
+        try:
+            wait_file(log, r"(?s)unit \d+: done.*unit (\d+): samples", 60)
+            hand.send_signal(signal.SIGKILL)
+            hand.wait(10)
+        finally:
+            if hand.poll() is None:
+                hand.kill()
+        d.wait_log(rf"job {job}: unit \d+ \(samples \d+:\d+\) back to the queue: conn \d+ \(hand\) left", 30)
+        # Slurm ends one array task (as a node failure or a preemption would): omegad starts another.
+        m = d.wait_log(rf"job {job}: unit \d+ \(samples \d+:\d+\) to conn \d+ \((slurm-{slurm_id}_\d)\)", 60)
+        task = m.group(1)[len("slurm-"):]
+        subprocess.run(["scancel", task], env=cluster.env(), check=True, timeout=30)
+        d.wait_log(rf"job {job}: 1 of its Slurm workers ended with work left; starting 1 more", 30)
+        m = d.wait_log(rf"job {job}: Slurm job (\d+): 1 worker\(s\) submitted", 30)
+        assert m.group(1) != slurm_id
+        d.wait_log(rf"job {job}: done on workers: {SPP} spp", 120)
+        slurm_workers = set(re.findall(rf"job {job}: unit \d+ \(samples \d+:\d+\) done by conn \d+ \((slurm-{slurm_id}_\d)\)",
+                                       d.log()))
+        assert slurm_workers, "no unit was rendered by a Slurm worker:\n" + d.log()[-3000:]
+        print(f"units rendered by Slurm workers {sorted(slurm_workers)} and by hand", flush=True)
+        d.wait_log(rf"job {job}: scancel [0-9 ]*{m.group(1)}[0-9 ]* \(job done\)", 10)
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            q = subprocess.run(["squeue", "-h", "-o", "%i %T"], env=cluster.env(), capture_output=True, text=True)
+            if not q.stdout.strip():
+                break
+            time.sleep(0.5)
+        assert not q.stdout.strip(), "Slurm jobs left after the job ended: " + q.stdout
+
+        out = os.path.join(tmp, "out.exr")
+        omega(["fetch", str(job), "-o", out], alice)
+        parts = []
+        for i in range(UNITS):
+            p = os.path.join(tmp, f"part{i}.exr")
+            omega(["render", scene, "--samples", f"{i * UNIT}:{(i + 1) * UNIT}", "-o", p, "-q", "--threads", "2"],
+                  alice)
+            parts.append(p)
+        merged = os.path.join(tmp, "merged.exr")
+        omega(["merge"] + parts + ["-o", merged, "-q"], alice)
+        r = subprocess.run([EXR_COMPARE, merged, out], capture_output=True, text=True)
+        assert r.returncode == 0, "result differs from omega merge of the same units: " + r.stdout + r.stderr
+        local = os.path.join(tmp, "local.exr")
+        omega(["render", scene, "--spp", str(SPP), "-o", local, "-q", "--threads", "2"], alice)
+        r = subprocess.run([EXR_COMPARE, "--rel-tol", "1e-6", local, out], capture_output=True, text=True)
+        assert r.returncode == 0, "result differs from omega render --spp beyond 1e-6: " + r.stdout + r.stderr
+
+
+if __name__ == "__main__":
+    t = Test()
+    try:
+        t.run(test_slurm_workers)
+    except SlurmUnavailable as e:
+        sys.stderr.write(f"FAILED: the test Slurm cluster cannot run here: {e}\n")
+        sys.exit(1)
+    t.exit()
