@@ -1,5 +1,9 @@
 #include "integrator/bdpt_tracer.h"
 
+#include <bit>
+
+#include "pathspace/path_signature.h"
+
 namespace omega {
 
 BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
@@ -26,6 +30,8 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
     if (n_light == 0) lit.clear();
 
     Rgb L(0.f);
+    if (aovs_)
+        for (size_t a = 0; a < aovs_->size(); ++a) scratch.aov_camera[a] = Rgb(0.f);
     if (use_t0_) {
         for (const LensCrossing& lc : scratch.lens) {
             if (max_depth_ >= 0 && lc.s > max_depth_) continue;  // k = s edges
@@ -34,7 +40,12 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             Rgb unweighted = c->L * float(c->importance);
             Rgb weighted = unweighted * float(c->weight);
             if (per_strategy) per_strategy->push_back({lc.s + 1, 0, unweighted, weighted, true, c->film});
-            splats.push_back({c->film, weighted});
+            uint32_t mask = 0;
+            if (aovs_) {
+                lens_signature(lit, lc.s, scratch.signature);
+                mask = aovs_->match(scratch.signature);
+            }
+            splats.push_back({c->film, weighted, mask});
         }
     }
     // t = 1 needs no camera subpath; s = 1 samples its light vertex afresh (next-event estimation).
@@ -57,8 +68,19 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
             Rgb weighted = unweighted * float(c->weight);
             if (per_strategy) per_strategy->push_back({s, t, unweighted, weighted, c->splat, c->film});
-            if (c->splat) splats.push_back({c->film, weighted});
-            else L += weighted;
+            uint32_t mask = 0;
+            if (aovs_) {
+                // The full path as this strategy built it, connection included, matched before
+                // its MIS-weighted value goes anywhere.
+                strategy_signature(lit, cam, s, t, scratch.signature);
+                mask = aovs_->match(scratch.signature);
+            }
+            if (c->splat) {
+                splats.push_back({c->film, weighted, mask});
+            } else {
+                L += weighted;
+                for (uint32_t m = mask; m; m &= m - 1) scratch.aov_camera[size_t(std::countr_zero(m))] += weighted;
+            }
         }
     }
     return L;

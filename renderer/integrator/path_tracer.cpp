@@ -1,6 +1,7 @@
 #include "integrator/path_tracer.h"
 
 #include "integrator/mis.h"
+#include "pathspace/path_signature.h"
 #include "scene/spawn.h"
 
 namespace omega {
@@ -38,7 +39,7 @@ Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const
     return f * ls->Li * (w / pdf_light_sa);
 }
 
-Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
+Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLpeTracker* lpe) const {
     const int max_depth = settings_.max_depth >= 0 ? settings_.max_depth : kMaxUnboundedDepth;
     const bool nee = settings_.light_sampling;
     Rgb L(0.f), beta(1.f);
@@ -60,7 +61,9 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
                 Rgb le = environment_le(el, d);
                 float w = prev_delta || !nee ? 1.f
                                              : power_heuristic(prev_pdf_sa, sel.pmf(size_t(env)) * environment_pdf_li_sa(el, d));
-                L += beta * le * w;
+                const Rgb c = beta * le * w;
+                L += c;
+                if (lpe) lpe->emit(c);
             }
             break;
         }
@@ -75,7 +78,9 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
                     float pdf_light_sa = sel.pmf(size_t(shape.light)) * light_pdf_li_sa(scene_, al, prev_p, hit);
                     w = power_heuristic(prev_pdf_sa, pdf_light_sa);
                 }
-                L += beta * le * w;
+                const Rgb c = beta * le * w;
+                L += c;
+                if (lpe) lpe->emit(c);
             }
         }
         if (k >= max_depth) break;  // the next edge would exceed max_depth
@@ -90,7 +95,9 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
         // Vertex k of the path (k edges before it) draws from its own block of dimensions.
         if (nee && bsdf_has_nondelta(bsdf)) {
             sampler.start_dimension(dims::camera_walk(k, dims::kDirect));
-            L += beta * sample_direct(hit, shading, wo_local, bsdf, sampler, stats);
+            const Rgb c = beta * sample_direct(hit, shading, wo_local, bsdf, sampler, stats);
+            L += c;
+            if (lpe) lpe->emit_via(nondelta_class(bsdf), c);
         }
 
         sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
@@ -102,6 +109,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
         if (!consistent_side(wi, hit.ng, bs->wi.z)) break;
         beta *= bs->weight;
         prev_delta = bs->is_delta();
+        if (lpe) lpe->scatter(scatter_class(bsdf, prev_delta));
         prev_pdf_sa = bs->pdf_sa;
         prev_p = hit.p;
         if (bs->lobe & kLobeTransmission) eta_scale *= sqr(bs->eta);

@@ -1,0 +1,50 @@
+#pragma once
+// The light path expression outputs of one render: the compiled expressions and one film per
+// AOV, filled exactly as the beauty film is.
+//  - Path tracing: every camera sample's per-AOV value goes in with Film::add_sample, in the
+//    same pixel and sample order as the beauty value (add_sample, from the worker owning the tile).
+//  - Light tracing and BDPT: each sample index is one batch, as for the beauty film. The
+//    camera-side sums (add_camera, from the worker owning the pixel) and the splats (add_splat,
+//    from the ordered splat merge on the driver thread) are summed per AOV in crop-sized
+//    buffers and enter the films with add_weighted at the end of the batch (add_batch, driver
+//    thread), with the same arithmetic as the beauty's.
+// So an AOV's mean and variance are bit-identical for any thread count, and merge, resume and
+// partial renders treat them as they treat the beauty.
+#include <bit>
+#include <vector>
+
+#include "film/aov_film.h"
+#include "pathspace/lpe.h"
+
+namespace omega {
+
+class AovImages {
+public:
+    // Throws std::invalid_argument for a bad name or expression (LpeError names the column).
+    AovImages(const FilmDesc& desc, const std::vector<AovDesc>& aovs);
+
+    const LpeSet& lpes() const { return lpes_; }
+    size_t size() const { return films_.size(); }
+    std::vector<AovFilm>& films() { return films_; }
+    const std::vector<AovFilm>& films() const { return films_; }
+
+    void add_sample(size_t aov, int x, int y, const Rgb& v) { films_[aov].film.add_sample(x, y, v); }
+
+    // Splatting integrators. begin_batch() zeroes the buffers (driver thread).
+    void begin_batch();
+    // `pixel` is the crop-relative row-major index (as the session's batch buffers).
+    void add_camera(size_t aov, size_t pixel, const Rgb& v) { camera_[aov][pixel] += Vec3d(v); }
+    void add_splat(uint32_t mask, size_t pixel, const Vec3d& v) {
+        for (; mask; mask &= mask - 1) splats_[size_t(std::countr_zero(mask))][pixel] += v;
+    }
+    // The batch's value at (x, y): camera + splats, the splats times `rescale` when the batch was
+    // cut (null: not cut; the beauty adds them unscaled then).
+    void add_batch(int x, int y, size_t pixel, const double* rescale);
+
+private:
+    LpeSet lpes_;
+    std::vector<AovFilm> films_;
+    std::vector<std::vector<Vec3d>> camera_, splats_;  // per AOV, crop-sized
+};
+
+}  // namespace omega
