@@ -1,0 +1,182 @@
+// Light path expression outputs rendered end to end: a partition of path space sums to the
+// beauty image for every integrator; each output agrees across path, light and bdpt by block
+// z-test; the beauty image does not change by a bit when AOVs are added; AOVs are as
+// deterministic as the beauty.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "render_harness.h"
+
+namespace omega {
+namespace {
+
+const IntegratorType kAll[] = {IntegratorType::Path, IntegratorType::Light, IntegratorType::Bdpt};
+
+const char* name_of(IntegratorType t) {
+    return t == IntegratorType::Path ? "path" : t == IntegratorType::Light ? "light" : "bdpt";
+}
+
+// Every path L x* E (x one of S, D, G) is in exactly one of these (lpe_test checks it on all
+// strings up to length 6).
+std::vector<AovDesc> partition() {
+    return {{"emitted", "L E"}, {"direct", "L D E"}, {"indirect", "L D D+ E"}, {"specular", "L .* S .* E"}};
+}
+
+// The metal cube scene (D floor, G rough metal, alpha 0.2) with a smooth glass ball in view:
+// every vertex class occurs.
+SceneDesc all_classes_scene() {
+    SceneDesc d = test::metal_cube_scene(16, 12);
+    DielectricBsdf glass;
+    glass.eta = 1.5f;
+    d.materials["glass"] = MaterialDesc{"glass", glass, {}};
+    ShapeDesc ball;
+    ball.type = ShapeType::Sphere;
+    ball.center = {-0.9, 0.35, 0};
+    ball.radius = 0.35;
+    ball.material = "glass";
+    d.shapes.push_back(ball);
+    return d;
+}
+
+const Film& aov(const test::RenderResult& r, size_t i) { return r.session->aovs()->films()[i].film; }
+
+bool same_state(const Film& a, const Film& b) {
+    const Rect c = a.crop();
+    for (int y = c.y0; y < c.y1; ++y)
+        for (int x = c.x0; x < c.x1; ++x) {
+            const PixelState sa = a.state(x, y), sb = b.state(x, y);
+            if (sa.n != sb.n || std::memcmp(&sa.w, &sb.w, sizeof sa.w) != 0 ||
+                std::memcmp(sa.mean, sb.mean, sizeof sa.mean) != 0 || std::memcmp(sa.m2, sb.m2, sizeof sa.m2) != 0)
+                return false;
+        }
+    return true;
+}
+
+TEST(LpeAov, PartitionSumsToTheBeauty) {
+    for (IntegratorType t : kAll) {
+        SceneDesc d = all_classes_scene();
+        d.integrator.type = t;
+        d.sensor.film.aovs = partition();
+        auto r = test::render(d, 16, 7, 2);
+        ASSERT_NE(r.session->aovs(), nullptr);
+        ASSERT_EQ(r.session->aovs()->size(), 4u);
+        EXPECT_EQ(r.report.nonfinite, 0u);
+        const Film& beauty = r.film();
+        const Rect c = beauty.crop();
+        double worst = 0, total = 0;
+        std::vector<double> part_total(4, 0.0);
+        for (int y = c.y0; y < c.y1; ++y)
+            for (int x = c.x0; x < c.x1; ++x) {
+                const PixelStats b = beauty.pixel(x, y);
+                for (int ch = 0; ch < 3; ++ch) {
+                    double sum = 0, mag = std::abs(b.mean[ch]);
+                    for (size_t a = 0; a < 4; ++a) {
+                        const double v = aov(r, a).pixel(x, y).mean[ch];
+                        ASSERT_TRUE(std::isfinite(v));
+                        sum += v;
+                        mag += std::abs(v);
+                        part_total[a] += v;
+                    }
+                    worst = std::max(worst, std::abs(sum - b.mean[ch]) / std::max(mag, 1e-30));
+                    total += b.mean[ch];
+                }
+            }
+        EXPECT_LT(worst, 1e-5) << name_of(t) << ": parts differ from the beauty beyond float rounding";
+        EXPECT_GT(total, 0.0) << name_of(t);
+        // Not a trivial partition: direct, indirect and specular light all reach the image.
+        for (size_t a = 1; a < 4; ++a) EXPECT_GT(part_total[a], 0.0) << name_of(t) << " " << partition()[a].name;
+    }
+}
+
+TEST(LpeAov, BeautyUnchangedAndDeterministic) {
+    for (IntegratorType t : kAll) {
+        SceneDesc plain = all_classes_scene();
+        plain.integrator.type = t;
+        SceneDesc with = plain;
+        with.sensor.film.aovs = partition();
+        with.sensor.film.aovs.push_back({"glossy", "L .* G .* E"});
+        // Splats are merged in tile order, so the tiling stays the same; the thread count changes.
+        auto a = test::render(plain, 4, 3, 1, 8);
+        auto b = test::render(with, 4, 3, 2, 8);
+        auto c = test::render(with, 4, 3, 1, 8);
+        EXPECT_TRUE(same_state(a.film(), b.film())) << name_of(t) << ": AOVs changed the beauty";
+        for (size_t i = 0; i < b.session->aovs()->size(); ++i)
+            EXPECT_TRUE(same_state(aov(b, i), aov(c, i))) << name_of(t) << " aov " << i << ": thread count changed it";
+    }
+}
+
+// A glass ball focusing a spherical light onto a diffuse floor, seen from above without the
+// ball (a path ending S E cannot be light traced): caustics, direct and indirect light.
+SceneDesc caustic_scene() {
+    SceneDesc d = test::empty_scene(24, 24);
+    d.integrator.max_depth = 6;
+    d.sensor.to_world = Mat4::look_at({-1.3, 2.2, -1.3}, {-1.1, 0, 0}, {0, 1, 0});
+    d.sensor.fov = 28;
+    d.materials["white"] = test::diffuse("white", Rgb(0.8f));
+    DielectricBsdf glass;
+    glass.eta = 1.5f;
+    d.materials["glass"] = MaterialDesc{"glass", glass, {}};
+    d.materials["black"] = MaterialDesc{"black", BlackBsdf{}, {}};
+    ShapeDesc floor;
+    floor.type = ShapeType::Rectangle;
+    floor.to_world = Mat4::rotate({1, 0, 0}, -90) * Mat4::scale({3, 3, 1});
+    floor.material = "white";
+    d.shapes.push_back(floor);
+    ShapeDesc ball;
+    ball.type = ShapeType::Sphere;
+    ball.center = {0, 0.6, 0};
+    ball.radius = 0.5;
+    ball.material = "glass";
+    d.shapes.push_back(ball);
+    ShapeDesc lamp;
+    lamp.type = ShapeType::Sphere;
+    lamp.center = {2.0, 2.0, 0};
+    lamp.radius = 0.4;
+    lamp.material = "black";
+    lamp.emitter = EmitterDesc{Rgb(8.f), false};
+    d.shapes.push_back(lamp);
+    d.sensor.film.aovs = {{"caustic", "L S+ D E"}, {"direct", "L D E"}, {"bounded", "L .{1,2} E"}};
+    return d;
+}
+
+TEST(LpeAov, EachOutputAgreesAcrossIntegrators) {
+    const SceneDesc d = caustic_scene();
+    struct Run {
+        IntegratorType t;
+        long long spp;
+        uint64_t seed;
+    };
+    const Run runs[] = {{IntegratorType::Path, 1024, 11}, {IntegratorType::Light, 512, 12}, {IntegratorType::Bdpt, 256, 13}};
+    std::vector<test::RenderResult> results;
+    for (const Run& run : runs) {
+        SceneDesc di = d;
+        di.integrator.type = run.t;
+        results.push_back(test::render(di, run.spp, run.seed, 2));
+        EXPECT_EQ(results.back().report.nonfinite, 0u);
+        EXPECT_EQ(results.back().report.mis_errors, 0u);
+    }
+    const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+    const size_t n = d.sensor.film.aovs.size();
+    for (size_t a = 0; a < n; ++a) {
+        double mean = 0;
+        const Film& f = aov(results[2], a);
+        for (int y = 0; y < 24; ++y)
+            for (int x = 0; x < 24; ++x) mean += f.pixel(x, y).mean.x;
+        EXPECT_GT(mean, 0.0) << d.sensor.film.aovs[a].name << " is black";
+        for (const auto& p : pairs) {
+            // Blocks of 8 x 8: light tracing reaches the dim direct light in few pixels per batch,
+            // and block sums are closer to normal than single sparse pixels.
+            const auto z = test::z_between(aov(results[size_t(p[0])], a), aov(results[size_t(p[1])], a), 8);
+            const double bound = test::z_threshold(z.blocks * 3 * int(n));
+            EXPECT_LT(z.max_abs_z, bound) << d.sensor.film.aovs[a].name << " " << name_of(runs[p[0]].t) << "-"
+                                          << name_of(runs[p[1]].t) << ": worst block";
+            EXPECT_LT(std::abs(z.z), test::z_threshold(3 * int(n)))
+                << d.sensor.film.aovs[a].name << " " << name_of(runs[p[0]].t) << "-" << name_of(runs[p[1]].t) << ": image";
+        }
+    }
+}
+
+}  // namespace
+}  // namespace omega
