@@ -175,6 +175,11 @@ struct ExrImage {
 // window larger than max_pixels.
 ExrImage read_exr(const std::string& path, long long max_pixels = 1LL << 26);
 
+// One extra RGB layer of a file (LAYER.R, LAYER.G, LAYER.B, float, e.g. "aov.caustics"), 3 floats
+// per pixel of the data window, row-major. Throws std::runtime_error naming the path and the
+// missing channel.
+std::vector<float> read_exr_layer(const std::string& path, const std::string& layer);
+
 // In-memory EXR of one rectangle of the film (inside crop()), same channels and attributes as
 // write_exr; the data window is rect, the display window the full film. For progressive tiles.
 std::vector<uint8_t> encode_exr_tile(const Film& film, const Rect& rect, const ExrMeta& meta);

@@ -342,6 +342,25 @@ void validate_aov_name(std::string_view name) {
             throw bad("only letters, digits and '_' are allowed (it names EXR channels aov.NAME.R)");
 }
 
+AovDesc parse_aov_arg(std::string_view arg) {
+    const size_t eq = arg.find('=');
+    if (eq == std::string_view::npos)
+        throw std::invalid_argument("--aov '" + std::string(arg) + "': expected NAME=EXPR, e.g. caustics='L S+ D E'");
+    AovDesc a{std::string(arg.substr(0, eq)), std::string(arg.substr(eq + 1))};
+    validate_aov_name(a.name);
+    compile_lpe(a.expr);
+    return a;
+}
+
+void set_aov(std::vector<AovDesc>& aovs, AovDesc aov) {
+    for (AovDesc& a : aovs)
+        if (a.name == aov.name) {
+            a.expr = std::move(aov.expr);
+            return;
+        }
+    aovs.push_back(std::move(aov));
+}
+
 LpeSet::LpeSet(const std::vector<AovDesc>& aovs) {
     if (aovs.size() > size_t(kMaxAovs))
         throw std::invalid_argument("at most " + std::to_string(kMaxAovs) + " aovs per film, " + std::to_string(aovs.size()) +

@@ -78,6 +78,13 @@ struct AovDesc {
     bool operator==(const AovDesc&) const = default;
 };
 
+// "NAME=EXPR" (omega render --aov): name validated, expression compiled. Throws
+// std::invalid_argument (LpeError for the expression).
+AovDesc parse_aov_arg(std::string_view arg);
+// Adds `aov`, or replaces the expression of the AOV of that name (the command line overrides
+// the scene's film).
+void set_aov(std::vector<AovDesc>& aovs, AovDesc aov);
+
 // The AOVs of one film, compiled. Concurrency: immutable after construction; any thread.
 class LpeSet {
 public:
