@@ -2,7 +2,6 @@
 
 #include <bit>
 
-#include "pathspace/path_signature.h"
 
 namespace omega {
 
@@ -30,8 +29,10 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
     if (n_light == 0) lit.clear();
 
     Rgb L(0.f);
-    if (aovs_)
+    if (aovs_) {
         for (size_t a = 0; a < aovs_->size(); ++a) scratch.aov_camera[a] = Rgb(0.f);
+        scratch.lpe.prepare(*aovs_, lit, n_light, cam, n_cam);
+    }
     if (use_t0_) {
         for (const LensCrossing& lc : scratch.lens) {
             if (max_depth_ >= 0 && lc.s > max_depth_) continue;  // k = s edges
@@ -40,11 +41,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             Rgb unweighted = c->L * float(c->importance);
             Rgb weighted = unweighted * float(c->weight);
             if (per_strategy) per_strategy->push_back({lc.s + 1, 0, unweighted, weighted, true, c->film});
-            uint32_t mask = 0;
-            if (aovs_) {
-                lens_signature(lit, lc.s, scratch.signature);
-                mask = aovs_->match(scratch.signature);
-            }
+            const uint32_t mask = aovs_ ? scratch.lpe.match_lens(lc.s) : 0;
             splats.push_back({c->film, weighted, mask});
         }
     }
@@ -68,13 +65,9 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
             Rgb weighted = unweighted * float(c->weight);
             if (per_strategy) per_strategy->push_back({s, t, unweighted, weighted, c->splat, c->film});
-            uint32_t mask = 0;
-            if (aovs_) {
-                // The full path as this strategy built it, connection included, matched before
-                // its MIS-weighted value goes anywhere.
-                strategy_signature(lit, cam, s, t, scratch.signature);
-                mask = aovs_->match(scratch.signature);
-            }
+            // The full path as this strategy built it, connection included, matched before its
+            // MIS-weighted value goes anywhere.
+            const uint32_t mask = aovs_ ? scratch.lpe.match(s, t) : 0;
             if (c->splat) {
                 splats.push_back({c->film, weighted, mask});
             } else {

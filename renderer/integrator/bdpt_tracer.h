@@ -6,6 +6,7 @@
 #include <array>
 #include <vector>
 
+#include "integrator/bdpt_lpe.h"
 #include "integrator/path_tracer.h"
 #include "pathspace/classify.h"
 #include "pathspace/connect.h"
@@ -25,9 +26,9 @@ struct BdptScratch {
     std::vector<PathVertex> camera, light;
     std::vector<LensCrossing> lens;  // t = 0
     ConnectStats connect;
-    // With AOVs: the current contribution's path signature, and the camera-side (t >= 2) sums
-    // per AOV of the last sample() (zeroed by it).
-    std::vector<VertexClass> signature;
+    // With AOVs: the sample's subpaths through each AOV's automaton, and the camera-side
+    // (t >= 2) sums per AOV of the last sample() (zeroed by it).
+    BdptLpeMatcher lpe;
     std::array<Rgb, kMaxAovs> aov_camera{};
 };
 

@@ -1,7 +1,6 @@
 #include "integrator/path_tracer.h"
 
 #include "integrator/mis.h"
-#include "pathspace/path_signature.h"
 #include "scene/spawn.h"
 
 namespace omega {
@@ -97,7 +96,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
             sampler.start_dimension(dims::camera_walk(k, dims::kDirect));
             const Rgb c = beta * sample_direct(hit, shading, wo_local, bsdf, sampler, stats);
             L += c;
-            if (lpe) lpe->emit_via(nondelta_class(bsdf), c);
+            if (lpe) lpe->emit_via(bsdf, c);
         }
 
         sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
@@ -109,7 +108,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
         if (!consistent_side(wi, hit.ng, bs->wi.z)) break;
         beta *= bs->weight;
         prev_delta = bs->is_delta();
-        if (lpe) lpe->scatter(scatter_class(bsdf, prev_delta));
+        if (lpe) lpe->scatter(bsdf, prev_delta);
         prev_pdf_sa = bs->pdf_sa;
         prev_p = hit.p;
         if (bs->lobe & kLobeTransmission) eta_scale *= sqr(bs->eta);

@@ -302,6 +302,85 @@ LpeDfa determinize(const Node& root, bool reversed, const std::string& text) {
     return dfa;
 }
 
+// For each state reachable from `start`, the shortest string reaching it (read in the
+// automaton's own order); unreachable states keep nothing and are marked in `reached`.
+void representatives(const LpeDfa& dfa, std::vector<std::vector<VertexClass>>& rep, std::vector<char>& reached) {
+    rep.assign(dfa.next.size(), {});
+    reached.assign(dfa.next.size(), 0);
+    std::vector<uint8_t> queue{dfa.start};
+    reached[dfa.start] = 1;
+    for (size_t i = 0; i < queue.size(); ++i) {
+        const uint8_t q = queue[i];
+        for (int c = 0; c < kVertexClasses; ++c) {
+            const uint8_t n = dfa.step(q, VertexClass(c));
+            if (reached[n]) continue;
+            reached[n] = 1;
+            rep[n] = rep[q];
+            rep[n].push_back(VertexClass(c));
+            queue.push_back(n);
+        }
+    }
+}
+
+std::vector<uint8_t> join_table(const LpeDfa& forward, const LpeDfa& reverse) {
+    std::vector<std::vector<VertexClass>> fr, rr;
+    std::vector<char> fok, rok;
+    representatives(forward, fr, fok);
+    representatives(reverse, rr, rok);
+    const size_t nf = forward.next.size(), nr = reverse.next.size();
+    std::vector<uint8_t> table(nf * nr, 0);
+    for (size_t f = 1; f < nf; ++f) {
+        if (!fok[f]) continue;
+        for (size_t r = 1; r < nr; ++r) {
+            if (!rok[r]) continue;
+            // rr[r] is the suffix read eye first: run it light first from f.
+            uint8_t q = uint8_t(f);
+            for (auto it = rr[r].rbegin(); it != rr[r].rend() && q; ++it) q = forward.step(q, *it);
+            table[f * nr + r] = forward.accepts(q) ? 1 : 0;
+        }
+    }
+    return table;
+}
+
+// Breadth-first over the tuples of component states reachable from the tuple of starts.
+// `tuples` receives each product state's components (n per state).
+LpeProduct make_product(const std::vector<const LpeDfa*>& dfas, std::vector<uint8_t>& tuples) {
+    LpeProduct p;
+    const size_t n = dfas.size();
+    // Keys widened to uint16_t: GCC 12 warns (falsely) on the memcmp a byte-vector key compiles to.
+    std::map<std::vector<uint16_t>, uint16_t> ids;
+    tuples.clear();
+    auto intern = [&](const std::vector<uint16_t>& t) -> int {
+        auto it = ids.find(t);
+        if (it != ids.end()) return it->second;
+        if (ids.size() >= kMaxProductStates) return -1;
+        const uint16_t id = uint16_t(ids.size());
+        ids.emplace(t, id);
+        for (uint16_t v : t) tuples.push_back(uint8_t(v));
+        return id;
+    };
+    std::vector<uint16_t> t(n);
+    for (size_t a = 0; a < n; ++a) t[a] = dfas[a]->start;
+    p.start = uint16_t(intern(t));
+    for (size_t s = 0; s < ids.size(); ++s) {
+        std::array<uint16_t, kVertexClasses> row{};
+        uint32_t acc = 0;
+        for (size_t a = 0; a < n; ++a)
+            if (dfas[a]->accepts(tuples[s * n + a])) acc |= 1u << a;
+        for (int c = 0; c < kVertexClasses; ++c) {
+            for (size_t a = 0; a < n; ++a) t[a] = dfas[a]->step(tuples[s * n + a], VertexClass(c));
+            const int id = intern(t);
+            if (id < 0) return LpeProduct{};  // too many: not ok
+            row[size_t(c)] = uint16_t(id);
+        }
+        p.next.push_back(row);
+        p.accept.push_back(acc);
+    }
+    for (size_t s = 0; s < p.next.size(); ++s) p.accept_l.push_back(p.accept[p.step(uint16_t(s), VertexClass::L)]);
+    p.ok = true;
+    return p;
+}
+
 }  // namespace
 
 char vertex_class_letter(VertexClass c) { return "LESDG"[size_t(c)]; }
@@ -325,6 +404,7 @@ Lpe compile_lpe(std::string_view expr) {
     auto root = Parser(expr, out.uses_g).parse();
     out.forward = determinize(*root, false, out.text);
     out.reverse = determinize(*root, true, out.text);
+    out.join_table = join_table(out.forward, out.reverse);
     return out;
 }
 
@@ -371,7 +451,28 @@ LpeSet::LpeSet(const std::vector<AovDesc>& aovs) {
             throw std::invalid_argument("aov '" + a.name + "' is defined twice");
         lpes_.push_back(compile_lpe(a.expr));
         names_.push_back(a.name);
+        uses_glossy_ = uses_glossy_ || lpes_.back().uses_g;
     }
+    std::vector<const LpeDfa*> fw, rv;
+    for (const Lpe& e : lpes_) {
+        fw.push_back(&e.forward);
+        rv.push_back(&e.reverse);
+    }
+    std::vector<uint8_t> ft, rt;
+    forward_ = make_product(fw, ft);
+    reverse_ = make_product(rv, rt);
+    if (!has_products()) return;
+    const size_t n = lpes_.size(), nf = forward_.next.size(), nr = reverse_.next.size();
+    join_.assign(nf * nr, 0);
+    for (size_t f = 0; f < nf; ++f)
+        for (size_t r = 0; r < nr; ++r) {
+            uint32_t m = 0;
+            for (size_t a = 0; a < n; ++a) {
+                const uint8_t fa = ft[f * n + a], ra = rt[r * n + a];
+                if (fa && ra && lpes_[a].join(fa, ra)) m |= 1u << a;
+            }
+            join_[f * nr + r] = m;
+        }
 }
 
 uint32_t LpeSet::match(std::span<const VertexClass> path) const {

@@ -60,10 +60,19 @@ struct LpeDfa {
 
 // An expression compiled twice: `forward` reads a path light to eye (x_0 first), `reverse` eye
 // to light (the path tracer's camera walk). Both accept exactly the same paths.
+//
+// `join` matches a path split in two without reading it again: a light prefix P that takes
+// `forward` to state f and a camera suffix Q whose reversal takes `reverse` to state r form a
+// match PQ exactly when join(f, r). (A DFA state fixes every future of its prefix, so the
+// verdict depends on (f, r) alone; compile_lpe fills the table from one representative per
+// state.) BDPT runs each subpath through its automaton once per sample and decides each (s, t)
+// connection with two steps and one lookup.
 struct Lpe {
     std::string text;
     LpeDfa forward, reverse;
     bool uses_g = false;  // the expression mentions G, so its D means non-glossy only
+    std::vector<uint8_t> join_table;  // forward states x reverse states, row-major
+    bool join(uint8_t f, uint8_t r) const { return join_table[size_t(f) * reverse.next.size() + r] != 0; }
 };
 // Throws LpeError.
 Lpe compile_lpe(std::string_view expr);
@@ -85,6 +94,20 @@ AovDesc parse_aov_arg(std::string_view arg);
 // the scene's film).
 void set_aov(std::vector<AovDesc>& aovs, AovDesc aov);
 
+// All AOVs of a film run as one automaton: a state is the tuple of every AOV's state, so a
+// vertex costs one lookup whatever the number of AOVs, and `accept` says at once which AOVs
+// match. Built by LpeSet when the reachable tuples are few (kMaxProductStates); `ok` false
+// otherwise, and callers step each AOV's automaton instead.
+constexpr size_t kMaxProductStates = 512;
+struct LpeProduct {
+    bool ok = false;
+    uint16_t start = 0;
+    std::vector<std::array<uint16_t, kVertexClasses>> next;
+    std::vector<uint32_t> accept;     // bit i: AOV i accepts in this state
+    std::vector<uint32_t> accept_l;   // bit i: AOV i accepts after one more L (next[s][L])
+    uint16_t step(uint16_t s, VertexClass c) const { return next[s][size_t(c)]; }
+};
+
 // The AOVs of one film, compiled. Concurrency: immutable after construction; any thread.
 class LpeSet {
 public:
@@ -98,9 +121,23 @@ public:
     // Bit i set: AOV i matches the full path (x_0 .. x_k, light first).
     uint32_t match(std::span<const VertexClass> path) const;
 
+    // Every AOV's forward (light first) and reversed (eye first) automaton as one, and for a
+    // light prefix in forward product state f and a camera suffix in reversed product state r,
+    // the AOVs that match the joined path (Lpe::join of each component).
+    const LpeProduct& forward_product() const { return forward_; }
+    const LpeProduct& reverse_product() const { return reverse_; }
+    bool has_products() const { return forward_.ok && reverse_.ok; }
+    // Some expression mentions G. If none does, D and G behave alike in every automaton, so
+    // callers may class every non-delta vertex D without asking the BSDF.
+    bool uses_glossy() const { return uses_glossy_; }
+    uint32_t join(uint16_t f, uint16_t r) const { return join_[size_t(f) * reverse_.next.size() + r]; }
+
 private:
     std::vector<Lpe> lpes_;
     std::vector<std::string> names_;
+    LpeProduct forward_, reverse_;
+    std::vector<uint32_t> join_;
+    bool uses_glossy_ = false;
 };
 
 }  // namespace omega

@@ -174,3 +174,65 @@ TEST(Lpe, AovNames) {
 
 }  // namespace
 }  // namespace omega
+
+namespace omega {
+namespace {
+
+// The join table decides every split of every path exactly as reading the whole path would.
+TEST(Lpe, JoinTableAgreesWithWholePathMatching) {
+    const std::vector<std::string> strings = all_strings(4);
+    for (const char* expr : {"L S+ D E", "L .* S .* E", "L D D+ E", "L (S D){2} E", "L .{1,3} G? E", "L D E | L S* E",
+                             "L E"}) {
+        const Lpe e = compile_lpe(expr);
+        for (const std::string& p : strings)
+            for (const std::string& q : strings) {
+                uint8_t f = e.forward.start;
+                for (VertexClass c : path(p)) f = e.forward.step(f, c);
+                uint8_t r = e.reverse.start;
+                const std::vector<VertexClass> qv = path(q);
+                for (auto it = qv.rbegin(); it != qv.rend(); ++it) r = e.reverse.step(r, *it);
+                std::string whole = p;
+                whole.append(q);
+                ASSERT_EQ(e.join(f, r), e.forward.matches(path(whole))) << expr << ": " << p << " | " << q;
+            }
+    }
+}
+
+}  // namespace
+}  // namespace omega
+
+namespace omega {
+namespace {
+
+// The product automata and their join table give, for every split of every path, the same
+// matches as each AOV's own automata.
+TEST(Lpe, ProductAgreesWithEachAutomaton) {
+    const LpeSet set({{"a", "L S+ D E"}, {"b", "L .* S .* E"}, {"c", "L D D+ E"}, {"d", "L .{1,3} G? E"},
+                      {"e", "L (S D){2} E"}, {"f", "L E"}});
+    ASSERT_TRUE(set.has_products());
+    const LpeProduct& fw = set.forward_product();
+    const LpeProduct& rv = set.reverse_product();
+    EXPECT_LT(fw.next.size(), 200u);
+    const std::vector<std::string> strings = all_strings(4);
+    for (const std::string& p : strings)
+        for (const std::string& q : strings) {
+            uint16_t f = fw.start;
+            for (VertexClass c : path(p)) f = fw.step(f, c);
+            uint16_t r = rv.start;
+            const std::vector<VertexClass> qv = path(q);
+            for (auto it = qv.rbegin(); it != qv.rend(); ++it) r = rv.step(r, *it);
+            std::string whole = p;
+            whole.append(q);
+            const uint32_t want = set.match(path(whole));
+            ASSERT_EQ(set.join(f, r), want) << p << " | " << q;
+            if (q.empty()) {
+                ASSERT_EQ(fw.accept[f], want) << p;
+            }
+            if (p.empty()) {
+                ASSERT_EQ(rv.accept[r], want) << q;
+            }
+        }
+}
+
+}  // namespace
+}  // namespace omega

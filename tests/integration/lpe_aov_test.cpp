@@ -54,25 +54,28 @@ bool same_state(const Film& a, const Film& b) {
     return true;
 }
 
-TEST(LpeAov, PartitionSumsToTheBeauty) {
+// Renders with `aovs` whose first `parts` entries partition path space, for every integrator,
+// and checks that they sum to the beauty within float rounding, and that each is lit.
+void expect_partition(const std::vector<AovDesc>& aovs, size_t parts, bool product) {
+    ASSERT_EQ(LpeSet(aovs).has_products(), product);
     for (IntegratorType t : kAll) {
         SceneDesc d = all_classes_scene();
         d.integrator.type = t;
-        d.sensor.film.aovs = partition();
+        d.sensor.film.aovs = aovs;
         auto r = test::render(d, 16, 7, 2);
         ASSERT_NE(r.session->aovs(), nullptr);
-        ASSERT_EQ(r.session->aovs()->size(), 4u);
+        ASSERT_EQ(r.session->aovs()->size(), aovs.size());
         EXPECT_EQ(r.report.nonfinite, 0u);
         const Film& beauty = r.film();
         const Rect c = beauty.crop();
         double worst = 0, total = 0;
-        std::vector<double> part_total(4, 0.0);
+        std::vector<double> part_total(parts, 0.0);
         for (int y = c.y0; y < c.y1; ++y)
             for (int x = c.x0; x < c.x1; ++x) {
                 const PixelStats b = beauty.pixel(x, y);
                 for (int ch = 0; ch < 3; ++ch) {
                     double sum = 0, mag = std::abs(b.mean[ch]);
-                    for (size_t a = 0; a < 4; ++a) {
+                    for (size_t a = 0; a < parts; ++a) {
                         const double v = aov(r, a).pixel(x, y).mean[ch];
                         ASSERT_TRUE(std::isfinite(v));
                         sum += v;
@@ -85,9 +88,23 @@ TEST(LpeAov, PartitionSumsToTheBeauty) {
             }
         EXPECT_LT(worst, 1e-5) << name_of(t) << ": parts differ from the beauty beyond float rounding";
         EXPECT_GT(total, 0.0) << name_of(t);
-        // Not a trivial partition: direct, indirect and specular light all reach the image.
-        for (size_t a = 1; a < 4; ++a) EXPECT_GT(part_total[a], 0.0) << name_of(t) << " " << partition()[a].name;
+        for (size_t a = 0; a < parts; ++a) {
+            if (aovs[a].name == "emitted") continue;  // the light is not in view
+            EXPECT_GT(part_total[a], 0.0) << name_of(t) << " " << aovs[a].name;
+        }
     }
+}
+
+TEST(LpeAov, PartitionSumsToTheBeauty) {
+    // By class: direct, indirect and specular light all reach the image (the light is not seen).
+    expect_partition(partition(), 4, true);
+    // By length modulo 3, next to counters that make the product automaton too large (their
+    // joint period, 3 * 5 * 7 * 11, is over kMaxProductStates): the path tracer and BDPT then
+    // step each AOV's automaton on its own.
+    expect_partition({{"k1", "L (. . .)* E"}, {"k2", "L . (. . .)* E"}, {"k0", "L . . (. . .)* E"}, {"upto25", "L .{0,25} E"},
+                      {"mod5", "L (. . . . .)* E"}, {"mod7", "L (. . . . . . .)* E"},
+                      {"mod11", "L (. . . . . . . . . . .)* E"}},
+                     3, false);
 }
 
 TEST(LpeAov, BeautyUnchangedAndDeterministic) {
@@ -214,6 +231,74 @@ TEST(LpeAov, ResumeFromSerializedFilmsIsExact) {
         for (size_t i = 0; i < whole.aovs()->size(); ++i)
             EXPECT_TRUE(same_state(whole.aovs()->films()[i].film, rest.aovs()->films()[i].film)) << name_of(t) << " " << i;
     }
+}
+
+}  // namespace
+}  // namespace omega
+
+#include "integrator/bdpt_lpe.h"
+#include "pathspace/path_signature.h"
+#include "pathspace/subpath.h"
+
+namespace omega {
+namespace {
+
+// BDPT decides each strategy from per-subpath automaton states (integrator/bdpt_lpe.h); reading
+// the strategy's whole signature (pathspace/path_signature.h) must give the same matches, for
+// every (s, t) of many sampled subpath pairs with every vertex class present. Checked with the
+// product automata, without any G (no BSDF queries) and with a set too large for a product.
+void expect_matcher_agrees(const std::vector<AovDesc>& aovs, bool product) {
+    SceneDesc d = all_classes_scene();
+    auto scene = Scene::build(d);
+    const LpeSet set(aovs);
+    ASSERT_EQ(set.has_products(), product);
+    WalkLimits cam_lim{8, 1000}, light_lim{7, 1000};
+    TracerStats stats;
+    const Sensor& sensor = scene->sensor();
+    BdptLpeMatcher matcher;
+    std::vector<VertexClass> sig;
+    int checked = 0;
+    uint32_t seen = 0;
+    for (int i = 0; i < 6000; ++i) {
+        Sampler rng(Rng::for_sample(7, 0, uint64_t(i)));
+        Vec2 film{rng.next_1d() * float(sensor.width), rng.next_1d() * float(sensor.height)};
+        Ray ray = sensor.generate_ray(film, {rng.next_1d(), rng.next_1d()});
+        std::vector<PathVertex> cam, lit;
+        const int nc = generate_camera_subpath(*scene, ray, cam_lim, rng, stats, cam);
+        const int nl = generate_light_subpath(*scene, light_lim, rng, stats, lit);
+        matcher.prepare(set, lit, nl, cam, nc);
+        for (int t = 1; t <= nc; ++t)
+            for (int s = 0; s <= nl; ++s) {
+                if (s + t - 1 < 1 || (s == 0 && cam[size_t(t - 1)].light < 0)) continue;
+                strategy_signature(lit, cam, s, t, sig);
+                const uint32_t want = set.match(sig);
+                ASSERT_EQ(matcher.match(s, t), want) << "s " << s << " t " << t;
+                seen |= want;
+                ++checked;
+            }
+        for (int s = 1; s <= nl; ++s) {
+            lens_signature(lit, s, sig);
+            ASSERT_EQ(matcher.match_lens(s), set.match(sig)) << "lens s " << s;
+        }
+    }
+    EXPECT_GT(checked, 10000);
+    EXPECT_EQ(seen, (1u << aovs.size()) - 1) << "some AOV was never matched";
+}
+
+TEST(LpeAov, SubpathMatcherAgreesWithWholeSignatures) {
+    std::vector<AovDesc> aovs = partition();
+    aovs.push_back({"caustic", "L S+ D E"});
+    aovs.push_back({"short", "L .{0,2} E"});
+    aovs.push_back({"seen_in_glass", "L .* D S+ E"});
+    expect_matcher_agrees(aovs, true);  // no G: D stands for every non-delta vertex
+    aovs.push_back({"glossy", "L .* G .* E"});
+    aovs.push_back({"direct_rough", "L (S|G)* D E"});  // G mentioned: this D is non-glossy only
+    expect_matcher_agrees(aovs, true);
+    // Counters of lengths 26, 3, 5 and 7 together: over kMaxProductStates tuples (the G
+    // automaton doubles them).
+    expect_matcher_agrees({{"upto25", "L .{0,25} E"}, {"mod3", "L (. . .)* E"}, {"mod5", "L (. . . . .)* E"},
+                           {"mod7", "L (. . . . . . .)* E"}, {"glossy", "L .* G .* E"}},
+                          false);
 }
 
 }  // namespace
