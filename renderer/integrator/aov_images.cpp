@@ -16,10 +16,10 @@ void AovImages::begin_batch() {
     }
 }
 
-void AovImages::add_batch(int x, int y, size_t pixel, const double* rescale) {
+void AovImages::add_batch(size_t pixel, const double* rescale) {
     for (size_t a = 0; a < films_.size(); ++a) {
         const Vec3d v = rescale ? camera_[a][pixel] + splats_[a][pixel] * *rescale : camera_[a][pixel] + splats_[a][pixel];
-        films_[a].film.add_weighted(x, y, v, 1.0);
+        films_[a].film.add_weighted_at(pixel, v, 1.0);
     }
 }
 

@@ -28,7 +28,13 @@ public:
     std::vector<AovFilm>& films() { return films_; }
     const std::vector<AovFilm>& films() const { return films_; }
 
-    void add_sample(size_t aov, int x, int y, const Rgb& v) { films_[aov].film.add_sample(x, y, v); }
+    // Path tracing: one camera sample's value of each AOV at pixel (x, y).
+    template <class Values>
+    void add_samples(int x, int y, const Values& values) {
+        if (films_.empty()) return;
+        const size_t i = films_.front().film.pixel_index(x, y);  // all films share the crop
+        for (size_t a = 0; a < films_.size(); ++a) films_[a].film.add_sample_at(i, values.value(a));
+    }
 
     // Splatting integrators. begin_batch() zeroes the buffers (driver thread).
     void begin_batch();
@@ -37,9 +43,9 @@ public:
     void add_splat(uint32_t mask, size_t pixel, const Vec3d& v) {
         for (; mask; mask &= mask - 1) splats_[size_t(std::countr_zero(mask))][pixel] += v;
     }
-    // The batch's value at (x, y): camera + splats, the splats times `rescale` when the batch was
-    // cut (null: not cut; the beauty adds them unscaled then).
-    void add_batch(int x, int y, size_t pixel, const double* rescale);
+    // The batch's value at crop pixel `pixel`: camera + splats, the splats times `rescale` when
+    // the batch was cut (null: not cut; the beauty adds them unscaled then).
+    void add_batch(size_t pixel, const double* rescale);
 
 private:
     LpeSet lpes_;

@@ -168,7 +168,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
         for (int y = crop.y0; y < crop.y1; ++y)
             for (int x = crop.x0; x < crop.x1; ++x) {
                 film_.add_weighted(x, y, sums[index(x, y)] + splats[index(x, y)], 1.0);
-                if (aovs) aovs->add_batch(x, y, index(x, y), nullptr);
+                if (aovs) aovs->add_batch(index(x, y), nullptr);
             }
         return;
     }
@@ -187,7 +187,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
         for (int y = r.y0; y < r.y1; ++y)
             for (int x = r.x0; x < r.x1; ++x) {
                 film_.add_weighted(x, y, sums[index(x, y)] + splats[index(x, y)] * rescale, 1.0);
-                if (aovs) aovs->add_batch(x, y, index(x, y), &rescale);
+                if (aovs) aovs->add_batch(index(x, y), &rescale);
             }
     }
 }
@@ -216,8 +216,7 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
                     continue;
                 }
                 film_.add_sample(x, y, L);
-                if (lpe)
-                    for (size_t a = 0; a < lpe->size(); ++a) aovs_->add_sample(a, x, y, lpe->value(a));
+                if (lpe) aovs_->add_samples(x, y, *lpe);
             }
         }
     }
