@@ -303,3 +303,32 @@ TEST(LpeAov, SubpathMatcherAgreesWithWholeSignatures) {
 
 }  // namespace
 }  // namespace omega
+
+namespace omega {
+namespace {
+
+// A daemon tile with AOV layers still decodes as the beauty for clients that know only R, G, B
+// and var.* (omega watch, the web view decode tiles with decode_exr_memory).
+TEST(LpeAov, TilesWithLayersDecodeAsTheBeauty) {
+    SceneDesc d = all_classes_scene();
+    d.sensor.film.aovs = partition();
+    auto r = test::render(d, 2, 1, 2);
+    const Film& film = r.film();
+    const Rect tile{4, 2, 12, 10};
+    ExrMeta meta;
+    append_aov_tile_layers(r.session->aovs()->films(), tile, meta);
+    ASSERT_EQ(meta.layers.size(), 8u);
+    EXPECT_EQ(meta.layers[0].name, "aov.emitted");
+    EXPECT_EQ(meta.layers[1].name, "aov.emitted.var");
+    const std::vector<uint8_t> bytes = encode_exr_tile(film, tile, meta);
+    const ExrImage img = decode_exr_memory(bytes);
+    ASSERT_EQ(img.width, 8);
+    ASSERT_EQ(img.height, 8);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x)
+            for (int c = 0; c < 3; ++c)
+                EXPECT_EQ(img.rgb[3 * size_t(y * 8 + x) + size_t(c)], float(film.pixel(tile.x0 + x, tile.y0 + y).mean[c]));
+}
+
+}  // namespace
+}  // namespace omega
