@@ -7,6 +7,12 @@ AovImages::AovImages(const FilmDesc& desc, const std::vector<AovDesc>& aovs) : l
 }
 
 void AovImages::begin_batch() {
+    // A batch that reached every pixel left the buffers zero (add_batch clears what it adds), so
+    // they are zeroed here only after a cut or aborted batch: one pass over them per batch.
+    if (clean_) {
+        clean_ = false;
+        return;
+    }
     const size_t n = films_.empty() ? 0 : size_t(films_.front().film.crop().area());
     camera_.resize(films_.size());
     splats_.resize(films_.size());
@@ -18,8 +24,11 @@ void AovImages::begin_batch() {
 
 void AovImages::add_batch(size_t pixel, const double* rescale) {
     for (size_t a = 0; a < films_.size(); ++a) {
-        const Vec3d v = rescale ? camera_[a][pixel] + splats_[a][pixel] * *rescale : camera_[a][pixel] + splats_[a][pixel];
+        Vec3d& c = camera_[a][pixel];
+        Vec3d& sp = splats_[a][pixel];
+        const Vec3d v = rescale ? c + sp * *rescale : c + sp;
         films_[a].film.add_weighted_at(pixel, v, 1.0);
+        c = sp = Vec3d(0.0);
     }
 }
 

@@ -44,13 +44,16 @@ public:
         for (; mask; mask &= mask - 1) splats_[size_t(std::countr_zero(mask))][pixel] += v;
     }
     // The batch's value at crop pixel `pixel`: camera + splats, the splats times `rescale` when
-    // the batch was cut (null: not cut; the beauty adds them unscaled then).
+    // the batch was cut (null: not cut; the beauty adds them unscaled then). Clears the pixel's sums.
     void add_batch(size_t pixel, const double* rescale);
+    // After add_batch reached every pixel of the crop: the next begin_batch need not zero.
+    void end_batch_complete() { clean_ = true; }
 
 private:
     LpeSet lpes_;
     std::vector<AovFilm> films_;
     std::vector<std::vector<Vec3d>> camera_, splats_;  // per AOV, crop-sized
+    bool clean_ = false;  // the buffers are sized and all zero
 };
 
 }  // namespace omega

@@ -170,6 +170,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                 film_.add_weighted(x, y, sums[index(x, y)] + splats[index(x, y)], 1.0);
                 if (aovs) aovs->add_batch(index(x, y), nullptr);
             }
+        if (aovs) aovs->end_batch_complete();
         return;
     }
     // Cut at the time limit: the light paths that ran are a uniform subset of the batch's (their
