@@ -33,7 +33,8 @@ int run_merge(const MergeArgs& a) {
         return 2;
     }
     try {
-        write_partial_exr(a.output, merged->film, merged->meta, merged->part);
+        append_aov_layers(merged->aovs, merged->meta);
+        write_partial_exr(a.output, merged->film, merged->meta, merged->part, merged->aovs);
     } catch (const std::exception& e) {
         fmt::print(stderr, "omega merge: {}\n", e.what());
         return 1;

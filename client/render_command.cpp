@@ -19,6 +19,7 @@
 #include "integrator/render_session.h"
 #include "progress_bar.h"
 #include "pathspace/classify.h"
+#include "pathspace/lpe_classify.h"
 #include "scene/scene.h"
 #include "scene/scene_error.h"
 #include "scene/mitsuba_importer.h"
@@ -101,6 +102,10 @@ void add_render_command(CLI::App& app, RenderArgs& a) {
         ->check(CLI::Range(1, 12))
         ->excludes(samples);
     cmd->add_option("-D,--define", a.defines, "Mitsuba XML scenes: set a <default> variable, name=value (repeatable)");
+    cmd->add_option("--aov", a.aovs,
+                    "Also write the light carried by the paths a light path expression matches, as EXR layers "
+                    "aov.NAME.R/G/B and aov.NAME.var.R/G/B: NAME=EXPR, e.g. caustics='L S+ D E' (repeatable; "
+                    "replaces a scene aov of the same name; see docs/scene-format.md)");
     cmd->add_option("--camera", a.camera, "glTF scenes: render this camera (node or camera name; default: the first)");
 }
 
@@ -127,14 +132,22 @@ int run_render(const RenderArgs& a) {
         if (a.integrator == "light") desc.integrator.type = IntegratorType::Light;
         if (a.integrator == "bdpt") desc.integrator.type = IntegratorType::Bdpt;
         if (auto s = sampler_from_name(a.sampler)) desc.integrator.sampler = *s;
+        for (const std::string& arg : a.aovs) set_aov(desc.sensor.film.aovs, parse_aov_arg(arg));
+        if (desc.sensor.film.aovs.size() > size_t(kMaxAovs))
+            throw std::invalid_argument(fmt::format("--aov: at most {} aovs per film", kMaxAovs));
         scene = Scene::build(desc);
     } catch (const SceneError& e) {
+        fmt::print(stderr, "omega: {}\n", e.what());
+        return 2;
+    } catch (const std::invalid_argument& e) {  // --aov
         fmt::print(stderr, "omega: {}\n", e.what());
         return 2;
     }
     // What the scene can produce but this integrator cannot sample, in full-path notation.
     for (const auto& w : scene->warnings()) desc.warnings.push_back(w);
     for (auto& w : path_space_warnings(*scene, desc.integrator.type)) desc.warnings.push_back(std::move(w));
+    for (auto& w : aov_warnings(*scene, LpeSet(desc.sensor.film.aovs), desc.integrator.type))
+        desc.warnings.push_back(std::move(w));
     for (const auto& w : desc.warnings) fmt::print(stderr, "omega: warning: {}\n", w);
 
     // Hashed before rendering, so an unreadable file fails now rather than after the render.
@@ -218,11 +231,14 @@ int run_render(const RenderArgs& a) {
     meta.warnings = desc.warnings;
     meta.rel_error = last.error.mean_rel_error;
     if (const StrategyImages* si = session->strategy_images()) meta.layers = si->layers(last.spp);
+    static const std::vector<AovFilm> kNoAovs;
+    const std::vector<AovFilm>& aovs = session->aovs() ? session->aovs()->films() : kNoAovs;
+    append_aov_layers(aovs, meta);
     try {
         if (range) {
             PartInfo part{{{range->begin, last.spp}}, scene_hash, a.seed, meta.integrator,
                           sampler_name(desc.integrator.sampler)};
-            write_partial_exr(out, session->film(), meta, part);
+            write_partial_exr(out, session->film(), meta, part, aovs);
         } else {
             write_exr(out, session->film(), meta);
         }

@@ -24,6 +24,7 @@ struct RenderArgs {
     std::vector<std::string> defines;  // -D name=value, for Mitsuba XML scenes
     std::string camera;                // --camera NAME, for glTF scenes
     std::string samples;  // "A:B": a partial render of sample indices [A, B), for `omega merge`
+    std::vector<std::string> aovs;  // --aov NAME=EXPR (repeatable): light path expression outputs
 };
 
 void add_render_command(CLI::App& app, RenderArgs& args);

@@ -98,6 +98,14 @@ void write_checkpoint(const std::string& path, const FilmSnapshot& s) {
   put(body, s.rel_error.value_or(0.0));
   put(body, std::uint64_t(s.film.size()));
   body.append(reinterpret_cast<const char*>(s.film.data()), s.film.size());
+  // Optional AOV section after the film: a count, then each film's size and bytes.
+  if (!s.aov_films.empty()) {
+    put(body, std::uint32_t(s.aov_films.size()));
+    for (const auto& f : s.aov_films) {
+      put(body, std::uint64_t(f.size()));
+      body.append(reinterpret_cast<const char*>(f.data()), f.size());
+    }
+  }
   std::string file(kMagic, sizeof kMagic);
   put(file, fnv1a(body));
   file += body;
@@ -124,8 +132,20 @@ std::optional<FilmSnapshot> read_checkpoint(const std::string& path) {
     double err = get<double>(v);
     if (has_err) s.rel_error = err;
     auto n = get<std::uint64_t>(v);
-    if (n != v.size()) throw std::runtime_error("truncated film");
-    s.film.assign(v.begin(), v.end());
+    if (n > v.size()) throw std::runtime_error("truncated film");
+    s.film.assign(v.begin(), v.begin() + std::ptrdiff_t(n));
+    v.remove_prefix(n);
+    if (!v.empty()) {
+      const auto count = get<std::uint32_t>(v);
+      if (count == 0 || count > 32) throw std::runtime_error("bad aov count " + std::to_string(count));
+      for (std::uint32_t i = 0; i < count; ++i) {
+        auto m = get<std::uint64_t>(v);
+        if (m > v.size()) throw std::runtime_error("truncated aov film");
+        s.aov_films.emplace_back(v.begin(), v.begin() + std::ptrdiff_t(m));
+        v.remove_prefix(m);
+      }
+      if (!v.empty()) throw std::runtime_error("trailing bytes");
+    }
     return s;
   } catch (const std::runtime_error& e) {
     throw std::runtime_error(path + ": " + e.what());

@@ -19,6 +19,9 @@ struct FilmSnapshot {
   std::uint64_t nonfinite = 0;
   std::optional<double> rel_error;
   std::vector<std::uint8_t> film;  // Film::serialize()
+  // Film::serialize() of each light path expression output, in the film's `aov` order (empty
+  // without AOVs; a checkpoint then has no AOV section, byte for byte as before AOVs existed).
+  std::vector<std::vector<std::uint8_t>> aov_films;
   // In memory only (not in the checkpoint file): what tile EXRs report in their omega.* header.
   std::string integrator;  // "path", "light" or "bdpt"; empty until known
   std::uint64_t seed = 0;

@@ -10,6 +10,7 @@
 
 #include "integrator/render_session.h"
 #include "pathspace/classify.h"
+#include "pathspace/lpe_classify.h"
 #include "scene/scene.h"
 #include "scene/scene_error.h"
 
@@ -42,25 +43,45 @@ ExrMeta meta_of(const FilmSnapshot& s) {
 
 }  // namespace
 
-EncodedTile encode_tile(const Film& film, const Rect& r, const ExrMeta& meta) {
-  auto bytes = encode_exr_tile(film, r, meta);
+EncodedTile encode_tile(const Film& film, const Rect& r, const ExrMeta& meta, const std::vector<AovFilm>& aovs) {
+  std::vector<std::uint8_t> bytes;
+  if (aovs.empty()) {
+    bytes = encode_exr_tile(film, r, meta);
+  } else {
+    ExrMeta m = meta;
+    append_aov_tile_layers(aovs, r, m);
+    bytes = encode_exr_tile(film, r, m);
+  }
   EncodedTile t;
   t.rect = protocol::Rect{std::uint32_t(r.x0), std::uint32_t(r.y0), std::uint32_t(r.x1), std::uint32_t(r.y1)};
   t.exr = std::make_shared<const std::string>(bytes.begin(), bytes.end());
   return t;
 }
 
-std::vector<EncodedTile> encode_tiles(const Film& film, int tile_size, const FilmSnapshot& meta) {
+std::vector<EncodedTile> encode_tiles(const Film& film, int tile_size, const FilmSnapshot& meta,
+                                      const std::vector<AovFilm>& aovs) {
   std::vector<Rect> rects = film.tiles(tile_size);
   std::vector<EncodedTile> out(rects.size());
   ExrMeta m = meta_of(meta);
-  tbb::parallel_for(std::size_t(0), rects.size(), [&](std::size_t i) { out[i] = encode_tile(film, rects[i], m); });
+  tbb::parallel_for(std::size_t(0), rects.size(), [&](std::size_t i) { out[i] = encode_tile(film, rects[i], m, aovs); });
   return out;
 }
 
-std::string encode_image(const Film& film, const FilmSnapshot& meta) {
-  auto bytes = encode_exr_tile(film, film.crop(), meta_of(meta));
+std::string encode_image(const Film& film, const FilmSnapshot& meta, const std::vector<AovFilm>& aovs) {
+  ExrMeta m = meta_of(meta);
+  append_aov_layers(aovs, m);
+  auto bytes = encode_exr_tile(film, film.crop(), m);
   return std::string(bytes.begin(), bytes.end());
+}
+
+std::vector<AovFilm> aov_films_of(const FilmDesc& film, const FilmSnapshot& snap) {
+  if (snap.aov_films.size() != film.aovs.size())
+    throw std::runtime_error("the film names " + std::to_string(film.aovs.size()) + " aovs, its snapshot holds " +
+                             std::to_string(snap.aov_films.size()));
+  std::vector<AovFilm> out;
+  for (std::size_t i = 0; i < film.aovs.size(); ++i)
+    out.push_back({film.aovs[i].name, film.aovs[i].expr, Film::deserialize(film, snap.aov_films[i])});
+  return out;
 }
 
 RenderWorker::RenderWorker(WorkerSpec spec, Log& log, PassFn on_pass, FinishFn on_finish, TileFn on_tile)
@@ -115,6 +136,8 @@ void RenderWorker::run() {
     // Path classes this integrator cannot sample go with the result like any other warning.
     for (const auto& w : scene->warnings()) desc.warnings.push_back(w);
     for (auto& w : path_space_warnings(*scene, desc.integrator.type)) desc.warnings.push_back(std::move(w));
+    for (auto& w : aov_warnings(*scene, LpeSet(desc.sensor.film.aovs), desc.integrator.type))
+      desc.warnings.push_back(std::move(w));
 
     std::shared_ptr<const FilmSnapshot> resume = spec_.resume;
     if (!resume) {
@@ -134,6 +157,15 @@ void RenderWorker::run() {
         resume = std::make_shared<const FilmSnapshot>(std::move(*ck));
         last_on_disk = true;
       }
+    }
+    if (resume && resume->aov_films.size() != desc.sensor.film.aovs.size()) {
+      // Not this job's film (its scene names other AOVs): resuming the beauty without its AOVs
+      // would leave them short of samples. Samples depend on (seed, pixel, index) alone, so
+      // starting again gives the same image.
+      log_.error("job {}: checkpoint holds {} aovs, the scene names {}; rendering again from 0 spp", spec_.job,
+                 resume->aov_films.size(), desc.sensor.film.aovs.size());
+      resume = nullptr;
+      last_on_disk = false;
     }
     last = resume;
 
@@ -162,7 +194,14 @@ void RenderWorker::run() {
     if (time_done) rs.halt.spp = static_cast<long long>(resume->spp);  // nothing left to render
 
     RenderSession session(*scene, rs);
-    if (resume) session.film() = Film::deserialize(desc.sensor.film, resume->film);
+    if (resume) {
+      session.film() = Film::deserialize(desc.sensor.film, resume->film);
+      if (AovImages* aovs = session.aovs())
+        for (std::size_t i = 0; i < aovs->size(); ++i)
+          aovs->films()[i].film = Film::deserialize(desc.sensor.film, resume->aov_films[i]);
+    }
+    static const std::vector<AovFilm> kNoAovs;
+    const std::vector<AovFilm>& aov_films = session.aovs() ? session.aovs()->films() : kNoAovs;
     {
       std::lock_guard lock(mutex_);
       session_ = &session;
@@ -195,7 +234,7 @@ void RenderWorker::run() {
         t.job = spec_.job;
         t.pass = pass_in_progress.load();
         t.spp = static_cast<std::uint64_t>(spp);
-        t.tile = encode_tile(session.film(), rect, m);
+        t.tile = encode_tile(session.film(), rect, m, aov_films);
         streamed.fetch_add(1);
         on_tile_(std::move(t));
       });
@@ -210,6 +249,7 @@ void RenderWorker::run() {
       snap->nonfinite = base_nonfinite + r.nonfinite;
       if (std::isfinite(r.error.mean_rel_error)) snap->rel_error = r.error.mean_rel_error;
       snap->film = session.film().serialize();
+      for (const AovFilm& a : aov_films) snap->aov_films.push_back(a.film.serialize());
       snap->integrator = integrator_name(desc.integrator.type);
       snap->seed = spec_.seed;
       last = snap;
@@ -238,7 +278,7 @@ void RenderWorker::run() {
       u.progress.rel_error = snap->rel_error;
       u.progress.samples_per_s = r.samples_per_s;
       u.tiles_streamed = streamed.exchange(0) == tile_count && !r.cut;
-      if (watched_.load() && !u.tiles_streamed) u.tiles = encode_tiles(session.film(), spec_.tile_size, *snap);
+      if (watched_.load() && !u.tiles_streamed) u.tiles = encode_tiles(session.film(), spec_.tile_size, *snap, aov_films);
       pass_in_progress.store(snap->pass + 1);
       if (snap->rel_error) last_rel_error.store(*snap->rel_error);
       on_pass_(std::move(u));
@@ -263,6 +303,7 @@ void RenderWorker::run() {
       m.nonfinite = meta.nonfinite;
       m.warnings = desc.warnings;
       m.rel_error = meta.rel_error.value_or(0);
+      append_aov_layers(aov_films, m);
       write_exr(spec_.paths.result(), session.film(), m);
       result.outcome = WorkerResult::Outcome::done;
     } else {

@@ -15,6 +15,7 @@
 #include "daemon/job_scene.h"
 #include "daemon/log.h"
 #include "daemon/thread_share.h"
+#include "film/aov_film.h"
 #include "film/film.h"
 #include "protocol/messages.h"
 
@@ -113,11 +114,16 @@ class RenderWorker {
   omega::RenderSession* session_ = nullptr;  // set by the driver while run() is in progress
 };
 
-// Any thread: encodes one tile of a film (whose pixels no thread is writing).
-EncodedTile encode_tile(const Film& film, const Rect& rect, const ExrMeta& meta);
+// Any thread: encodes one tile of a film (whose pixels no thread is writing), with the tile of
+// each AOV as layers aov.NAME and aov.NAME.var.
+EncodedTile encode_tile(const Film& film, const Rect& rect, const ExrMeta& meta, const std::vector<AovFilm>& aovs = {});
 // Any thread: encodes every tile of a film (in parallel) for subscribers.
-std::vector<EncodedTile> encode_tiles(const Film& film, int tile_size, const FilmSnapshot& meta);
+std::vector<EncodedTile> encode_tiles(const Film& film, int tile_size, const FilmSnapshot& meta,
+                                      const std::vector<AovFilm>& aovs = {});
 // Any thread: the whole film as one in-memory EXR.
-std::string encode_image(const Film& film, const FilmSnapshot& meta);
+std::string encode_image(const Film& film, const FilmSnapshot& meta, const std::vector<AovFilm>& aovs = {});
+// Any thread: the AOV films a snapshot holds, named by the job's film. Throws
+// std::runtime_error when the snapshot holds another number of AOVs than the film names.
+std::vector<AovFilm> aov_films_of(const FilmDesc& film, const FilmSnapshot& snap);
 
 }  // namespace omega::daemon

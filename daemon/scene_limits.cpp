@@ -14,7 +14,9 @@ std::string mib(std::uint64_t b) { return fmt::format("{:.0f} MiB", double(b) / 
 }  // namespace
 
 std::uint64_t film_memory_estimate(const SceneDesc& d) {
-  return std::uint64_t(d.sensor.film.width) * std::uint64_t(d.sensor.film.height) * kFilmBytesPerPixel;
+  // Each light path expression output is a film of its own, with its snapshots and batch sums.
+  return std::uint64_t(d.sensor.film.width) * std::uint64_t(d.sensor.film.height) * kFilmBytesPerPixel *
+         (1 + std::uint64_t(d.sensor.film.aovs.size()));
 }
 
 void check_scene_limits(const SceneLimits& l, const SceneDesc& d, std::uint64_t asset_bytes, const std::string& file) {

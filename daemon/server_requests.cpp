@@ -467,7 +467,7 @@ void Server::on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job) {
       }
       meta.seed = rec.seed;
       Film f = Film::deserialize(fd, meta.film);
-      tiles = encode_tiles(f, tile, meta);
+      tiles = encode_tiles(f, tile, meta, aov_films_of(fd, meta));
     } catch (const std::exception& e) {
       err = e.what();
     }
@@ -515,7 +515,7 @@ void Server::on_fetch(Connection& c, std::uint64_t id, std::uint64_t job) {
       } else {
         FilmDesc fd = film ? *film : load_job_scene(jp, rec.name, rec.integrator, rec.sampler, roots).sensor.film;
         Film f = Film::deserialize(fd, snap->film);
-        img.exr = encode_image(f, *snap);
+        img.exr = encode_image(f, *snap, aov_films_of(fd, *snap));
         img.width = std::uint32_t(f.width());
         img.height = std::uint32_t(f.height());
         img.pass = snap->pass;

@@ -168,8 +168,9 @@ std::string number_text(float v) {
 }
 
 // UINT channels are read only from files (partial renders); network bytes never need them, and
-// a hostile tile could declare thousands.
-constexpr int kMaxUintChannels = 32;
+// a hostile tile could declare thousands. A part holds 16 for its film and 16 per AOV (at most
+// 32 AOVs, pathspace/lpe.h).
+constexpr int kMaxUintChannels = 16 * (1 + 32);
 
 ExrImage read_image(Imf::InputFile& file, long long max_pixels, bool with_uint) {
     const Imf::Header& header = file.header();
@@ -306,6 +307,31 @@ ExrImage read_exr(const std::string& path, long long max_pixels) {
         return read_image(file, max_pixels, true);
     } catch (const std::exception& e) {
         throw std::runtime_error("read_exr: " + path + ": " + e.what());
+    }
+}
+
+std::vector<float> read_exr_layer(const std::string& path, const std::string& layer) {
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imf::Header& header = file.header();
+        const Imath::Box2i dw = header.dataWindow();
+        const size_t w = size_t(dw.max.x - dw.min.x + 1), h = size_t(dw.max.y - dw.min.y + 1);
+        std::vector<float> out(3 * w * h);
+        Imf::FrameBuffer fb;
+        for (int k = 0; k < 3; ++k) {
+            std::string name = layer;
+            name += '.';
+            name += "RGB"[k];
+            const Imf::Channel* c = header.channels().findChannel(name);
+            if (!c || c->type != Imf::FLOAT || c->xSampling != 1 || c->ySampling != 1)
+                throw std::runtime_error("no float channel " + name);
+            fb.insert(name, Imf::Slice::Make(Imf::FLOAT, &out[size_t(k)], dw, 3 * sizeof(float), 3 * sizeof(float) * w));
+        }
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+        return out;
+    } catch (const std::exception& e) {
+        throw std::runtime_error("read_exr_layer: " + path + ": " + e.what());
     }
 }
 

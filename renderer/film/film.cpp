@@ -57,8 +57,10 @@ size_t Film::index(int x, int y) const {
 
 void Film::add_sample(int x, int y, const Rgb& value) { add_weighted(x, y, Vec3d(value), 1.0); }
 
-void Film::add_weighted(int x, int y, const Vec3d& value, double weight) {
-    Accum& a = px_[index(x, y)];
+void Film::add_weighted(int x, int y, const Vec3d& value, double weight) { add_weighted_at(index(x, y), value, weight); }
+
+void Film::add_weighted_at(size_t i, const Vec3d& value, double weight) {
+    Accum& a = px_[i];
     // Weighted Welford (West 1979): stable where sum/sum-of-squares cancels catastrophically
     // (bright, low-variance pixels). With unit weights it is the classic update.
     a.n += 1;

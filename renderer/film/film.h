@@ -83,6 +83,11 @@ public:
     // Variance then comes from the spread of batch means: valid where per-sample statistics
     // are not (light-tracing splats land in pixels without a per-pixel sample count).
     void add_weighted(int x, int y, const Vec3d& value, double weight);
+    // The same updates for pixel i of the crop (row-major, as pixel_index gives it), unchecked:
+    // for callers that add to several films at one pixel (AOVs) and checked it once.
+    size_t pixel_index(int x, int y) const { return index(x, y); }
+    void add_sample_at(size_t i, const Rgb& value) { add_weighted_at(i, Vec3d(value), 1.0); }
+    void add_weighted_at(size_t i, const Vec3d& value, double weight);
     PixelStats pixel(int x, int y) const;
     // Pixels with fewer than 2 samples have no variance estimate; while any exists in the crop,
     // mean_rel_error and image_mean_stderr are +inf so that a target-error halt cannot fire.
@@ -174,6 +179,11 @@ struct ExrImage {
 // Throws std::runtime_error naming the path on failure, a missing R/G/B channel, or a data
 // window larger than max_pixels.
 ExrImage read_exr(const std::string& path, long long max_pixels = 1LL << 26);
+
+// One extra RGB layer of a file (LAYER.R, LAYER.G, LAYER.B, float, e.g. "aov.caustics"), 3 floats
+// per pixel of the data window, row-major. Throws std::runtime_error naming the path and the
+// missing channel.
+std::vector<float> read_exr_layer(const std::string& path, const std::string& layer);
 
 // In-memory EXR of one rectangle of the film (inside crop()), same channels and attributes as
 // write_exr; the data window is rect, the display window the full film. For progressive tiles.

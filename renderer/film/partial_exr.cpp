@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <set>
 
+#include "pathspace/lpe.h"
+
 namespace omega {
 
 namespace {
@@ -14,8 +16,10 @@ namespace {
 // The eight 64-bit words of a PixelState, in channel order.
 constexpr std::array<const char*, 8> kWords = {"n", "w", "mean.R", "mean.G", "mean.B", "m2.R", "m2.G", "m2.B"};
 
-std::string lo_name(const char* word) { return std::string("state.") + word + ".lo"; }
-std::string hi_name(const char* word) { return std::string("state.") + word + ".hi"; }
+// The beauty's state channels are state.WORD.lo/hi; an AOV's are aov.NAME.state.WORD.lo/hi.
+std::string lo_name(const char* word, const std::string& prefix = {}) { return prefix + "state." + word + ".lo"; }
+std::string hi_name(const char* word, const std::string& prefix = {}) { return prefix + "state." + word + ".hi"; }
+std::string aov_prefix(const std::string& name) { return "aov." + name + "."; }
 
 std::array<uint64_t, 8> words_of(const PixelState& s) {
     return {s.n,
@@ -100,7 +104,10 @@ std::vector<SampleRange> parse_ranges(std::string_view text) {
     return out;
 }
 
-void write_partial_exr(const std::string& path, const Film& film, ExrMeta meta, const PartInfo& part) {
+namespace {
+
+// The film's exact state as 16 UINT channels named with `prefix`.
+void append_state_channels(const Film& film, const std::string& prefix, ExrMeta& meta) {
     const Rect c = film.crop();
     const size_t area = size_t(c.area());
     std::array<std::vector<uint32_t>, 16> planes;
@@ -115,9 +122,44 @@ void write_partial_exr(const std::string& path, const Film& film, ExrMeta meta, 
             }
         }
     for (size_t k = 0; k < kWords.size(); ++k) {
-        meta.uint_channels.push_back({lo_name(kWords[k]), std::move(planes[2 * k])});
-        meta.uint_channels.push_back({hi_name(kWords[k]), std::move(planes[2 * k + 1])});
+        meta.uint_channels.push_back({lo_name(kWords[k], prefix), std::move(planes[2 * k])});
+        meta.uint_channels.push_back({hi_name(kWords[k], prefix), std::move(planes[2 * k + 1])});
     }
+}
+
+// Restores a film's state from the channels named with `prefix`; throws std::runtime_error
+// (without the path: the caller adds it) for a missing channel or a state no film could hold.
+void read_state_channels(const ExrImage& img, const std::string& prefix, Film& film) {
+    std::array<const std::vector<uint32_t>*, 16> planes{};
+    for (size_t k = 0; k < kWords.size(); ++k) {
+        for (int half = 0; half < 2; ++half) {
+            const std::string name = half ? hi_name(kWords[k], prefix) : lo_name(kWords[k], prefix);
+            auto it = img.uint_channels.find(name);
+            if (it == img.uint_channels.end()) throw std::runtime_error("no channel " + name);
+            planes[2 * k + size_t(half)] = &it->second;
+        }
+    }
+    size_t i = 0;
+    try {
+        for (int y = img.y0; y < img.y0 + img.height; ++y)
+            for (int x = img.x0; x < img.x0 + img.width; ++x, ++i) {
+                std::array<uint64_t, 8> w{};
+                for (size_t k = 0; k < w.size(); ++k)
+                    w[k] = uint64_t((*planes[2 * k])[i]) | uint64_t((*planes[2 * k + 1])[i]) << 32;
+                film.set_state(x, y, state_of(w));
+            }
+    } catch (const std::runtime_error& e) {
+        throw std::runtime_error(prefix + "state channels: " + e.what());
+    }
+}
+
+}  // namespace
+
+void write_partial_exr(const std::string& path, const Film& film, ExrMeta meta, const PartInfo& part,
+                       const std::vector<AovFilm>& aovs) {
+    append_state_channels(film, {}, meta);
+    for (const AovFilm& a : aovs) append_state_channels(a.film, aov_prefix(a.name), meta);
+    if (!aovs.empty()) meta.attributes["omega.aovs"] = format_aov_list(aovs);
     meta.attributes["omega.samples"] = format_ranges(part.ranges);
     meta.attributes["omega.scene_hash"] = part.scene_hash;
     meta.seed = part.seed;
@@ -165,29 +207,23 @@ PartialRender read_partial_exr(const std::string& path) {
         out.meta.warnings.push_back(it->second.substr(start));
     }
 
-    std::array<const std::vector<uint32_t>*, 16> planes{};
-    for (size_t k = 0; k < kWords.size(); ++k) {
-        for (int half = 0; half < 2; ++half) {
-            const std::string name = half ? hi_name(kWords[k]) : lo_name(kWords[k]);
-            auto it = img.uint_channels.find(name);
-            if (it == img.uint_channels.end()) throw fail("no channel " + name);
-            planes[2 * k + size_t(half)] = &it->second;
-        }
-    }
     long long samples_held = 0;
     for (const SampleRange& r : out.part.ranges) samples_held += r.size();
     out.meta.spp = samples_held;
-    size_t i = 0;
     try {
-        for (int y = img.y0; y < img.y0 + img.height; ++y)
-            for (int x = img.x0; x < img.x0 + img.width; ++x, ++i) {
-                std::array<uint64_t, 8> w{};
-                for (size_t k = 0; k < w.size(); ++k)
-                    w[k] = uint64_t((*planes[2 * k])[i]) | uint64_t((*planes[2 * k + 1])[i]) << 32;
-                out.film.set_state(x, y, state_of(w));
+        read_state_channels(img, {}, out.film);
+        if (auto it = img.attributes.find("omega.aovs"); it != img.attributes.end())
+            for (auto& [name, expr] : parse_aov_list(it->second)) {
+                try {
+                    validate_aov_name(name);
+                } catch (const std::invalid_argument& e) {
+                    throw std::runtime_error(std::string("omega.aovs: ") + e.what());
+                }
+                out.aovs.push_back({name, expr, Film(out.film.desc())});
+                read_state_channels(img, aov_prefix(name), out.aovs.back().film);
             }
     } catch (const std::runtime_error& e) {
-        throw fail(std::string("state channels: ") + e.what());
+        throw fail(e.what());
     }
     out.meta.rel_error = out.film.estimate_error().mean_rel_error;
     return out;
@@ -212,6 +248,9 @@ MergeResult merge_parts(std::vector<PartialRender> parts, bool allow_gaps) {
             throw differs(p, "integrator", p.part.integrator, first.part.integrator);
         if (p.part.sampler != first.part.sampler)
             throw differs(p, "sampler", p.part.sampler, first.part.sampler);
+        if (format_aov_list(p.aovs) != format_aov_list(first.aovs))
+            throw MergeRefused(p.path + ": aovs [" + format_aov_list(p.aovs) + "] differ from " + first.path + "'s [" +
+                               format_aov_list(first.aovs) + "]: parts must render the same light path expressions");
         const Rect a = p.film.crop(), b = first.film.crop();
         if (p.film.width() != first.film.width() || p.film.height() != first.film.height() || a.x0 != b.x0 ||
             a.y0 != b.y0 || a.x1 != b.x1 || a.y1 != b.y1)
@@ -241,9 +280,11 @@ MergeResult merge_parts(std::vector<PartialRender> parts, bool allow_gaps) {
         }
     }
 
+    for (const AovFilm& a : first.aovs) out.aovs.push_back({a.name, a.expr, Film(first.film.desc())});
     std::set<std::string> seen_warnings;
     for (const PartialRender& p : parts) {
         out.film.merge(p.film);
+        for (size_t i = 0; i < out.aovs.size(); ++i) out.aovs[i].film.merge(p.aovs[i].film);
         out.meta.time_s += p.meta.time_s;
         out.meta.nonfinite += p.meta.nonfinite;
         for (const std::string& w : p.meta.warnings)

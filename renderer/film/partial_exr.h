@@ -21,6 +21,7 @@
 #include <string_view>
 #include <vector>
 
+#include "film/aov_film.h"
 #include "film/film.h"
 
 namespace omega {
@@ -49,13 +50,17 @@ struct PartInfo {
 
 // Writes the film as a part: meta's channels and attributes plus the state channels and the
 // PartInfo attributes. Throws std::runtime_error naming the path on I/O failure.
-void write_partial_exr(const std::string& path, const Film& film, ExrMeta meta, const PartInfo& part);
+// Each AOV's state goes in 16 more channels (aov.NAME.state.*) and the list in omega.aovs, so
+// AOVs merge exactly as the beauty does; their aov.NAME layers are the caller's (in meta).
+void write_partial_exr(const std::string& path, const Film& film, ExrMeta meta, const PartInfo& part,
+                       const std::vector<AovFilm>& aovs = {});
 
 struct PartialRender {
     std::string path;
     PartInfo part;
     ExrMeta meta;  // spp, time_s, nonfinite, warnings, rel_error as written
     Film film;
+    std::vector<AovFilm> aovs;  // from omega.aovs and the aov.NAME.state.* channels
 };
 
 // Throws std::runtime_error naming the path: unreadable, not a part (no state channels or
@@ -73,10 +78,11 @@ struct MergeResult {
     ExrMeta meta;  // spp = samples held; time_s and nonfinite summed; warnings united
     PartInfo part;
     std::vector<SampleRange> gaps;  // between the first and last sample held
+    std::vector<AovFilm> aovs;      // merged like the film
 };
 
 // Merges parts in order of their first sample (so the argument order does not change a bit).
-// Refuses (MergeRefused) parts that differ in scene hash, seed, integrator, sampler or film windows,
+// Refuses (MergeRefused) parts that differ in scene hash, seed, integrator, sampler, AOVs or film windows,
 // ranges that overlap, and gaps unless allow_gaps (the result then lists them in omega.gaps).
 MergeResult merge_parts(std::vector<PartialRender> parts, bool allow_gaps);
 

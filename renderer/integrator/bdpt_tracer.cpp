@@ -1,5 +1,7 @@
 #include "integrator/bdpt_tracer.h"
 
+#include <bit>
+
 #include "pathspace/mirror_connector.h"
 
 namespace omega {
@@ -39,6 +41,10 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
     if (n_light == 0) lit.clear();
 
     Rgb L(0.f);
+    if (aovs_) {
+        for (size_t a = 0; a < aovs_->size(); ++a) scratch.aov_camera[a] = Rgb(0.f);
+        scratch.lpe.prepare(*aovs_, lit, n_light, cam, n_cam);
+    }
     if (use_t0_) {
         for (const LensCrossing& lc : scratch.lens) {
             if (max_depth_ >= 0 && lc.s > max_depth_) continue;  // k = s edges
@@ -47,7 +53,8 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             Rgb unweighted = c->L * float(c->importance);
             Rgb weighted = unweighted * float(c->weight);
             if (per_strategy) per_strategy->push_back({lc.s + 1, 0, unweighted, weighted, true, c->film});
-            splats.push_back({c->film, weighted});
+            const uint32_t mask = aovs_ ? scratch.lpe.match_lens(lc.s) : 0;
+            splats.push_back({c->film, weighted, mask});
         }
     }
     // t = 1 needs no camera subpath; s = 1 samples its light vertex afresh (next-event estimation).
@@ -70,8 +77,15 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
             Rgb weighted = unweighted * float(c->weight);
             if (per_strategy) per_strategy->push_back({s, t, unweighted, weighted, c->splat, c->film});
-            if (c->splat) splats.push_back({c->film, weighted});
-            else L += weighted;
+            // The full path as this strategy built it, connection included, matched before its
+            // MIS-weighted value goes anywhere.
+            const uint32_t mask = aovs_ ? scratch.lpe.match(s, t) : 0;
+            if (c->splat) {
+                splats.push_back({c->film, weighted, mask});
+            } else {
+                L += weighted;
+                for (uint32_t m = mask; m; m &= m - 1) scratch.aov_camera[size_t(std::countr_zero(m))] += weighted;
+            }
         }
     }
     // Connections through a planar mirror: the mirror vertex adds an edge, k = s + t.
@@ -87,8 +101,13 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
                     if (!c) continue;
                     Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
                     Rgb weighted = unweighted * float(c->weight);
-                    if (c->splat) splats.push_back({c->film, weighted});
-                    else L += weighted;
+                    const uint32_t mask = aovs_ ? scratch.lpe.match(s, t, true) : 0;
+                    if (c->splat) {
+                        splats.push_back({c->film, weighted, mask});
+                    } else {
+                        L += weighted;
+                        for (uint32_t m = mask; m; m &= m - 1) scratch.aov_camera[size_t(std::countr_zero(m))] += weighted;
+                    }
                 }
             }
     }

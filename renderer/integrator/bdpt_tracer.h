@@ -3,11 +3,14 @@
 // strategy) and light tracing (t = 1 only), both over the path-space core in pathspace/.
 // The same engine restricted to s <= 1 is the path tracer, used by tests to check the fast
 // PathTracer against the general MIS routine.
+#include <array>
 #include <vector>
 
+#include "integrator/bdpt_lpe.h"
 #include "integrator/path_tracer.h"
 #include "pathspace/classify.h"
 #include "pathspace/connect.h"
+#include "pathspace/lpe.h"
 
 namespace omega {
 
@@ -15,6 +18,7 @@ namespace omega {
 struct Splat {
     Vec2 film;
     Rgb value;  // already multiplied by the sensor importance; times the filter weight per pixel
+    uint32_t aov_mask = 0;  // bit i: AOV i's expression matches this contribution's path
 };
 
 // Scratch owned by one worker thread.
@@ -22,6 +26,10 @@ struct BdptScratch {
     std::vector<PathVertex> camera, light;
     std::vector<LensCrossing> lens;  // t = 0
     ConnectStats connect;
+    // With AOVs: the sample's subpaths through each AOV's automaton, and the camera-side
+    // (t >= 2) sums per AOV of the last sample() (zeroed by it).
+    BdptLpeMatcher lpe;
+    std::array<Rgb, kMaxAovs> aov_camera{};
 };
 
 struct StrategyContribution {
@@ -41,6 +49,11 @@ public:
     Rgb sample(const Ray& ray, Sampler& sampler, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,
                std::vector<StrategyContribution>* per_strategy = nullptr) const;
 
+    // AOVs to match every contribution against (null: none); set before sampling starts. The
+    // set must outlive the tracer's use. Splats then carry their match mask, and
+    // scratch.aov_camera the camera-side values.
+    void set_aovs(const LpeSet* aovs) { aovs_ = aovs && !aovs->empty() ? aovs : nullptr; }
+
     const StrategySet& strategies() const { return set_; }
     const StrategyPlan& plan() const { return plan_; }
 
@@ -52,6 +65,7 @@ private:
     bool use_t0_ = false;  // light subpaths that hit the lens are a strategy here
     WalkLimits camera_limits_, light_limits_;
     std::shared_ptr<const PlanarMirrors> mirrors_;  // the connector's mirrors (set_.mirrors points here); null if none
+    const LpeSet* aovs_ = nullptr;
 };
 
 }  // namespace omega

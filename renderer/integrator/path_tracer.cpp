@@ -59,7 +59,7 @@ Rgb PathTracer::sample_direct_via_mirrors(const SurfaceHit& hit, const Frame& sh
     return L;
 }
 
-Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
+Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLpeTracker* lpe) const {
     const int max_depth = settings_.max_depth >= 0 ? settings_.max_depth : kMaxUnboundedDepth;
     const bool nee = settings_.light_sampling;
     Rgb L(0.f), beta(1.f);
@@ -94,7 +94,9 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
                 if (via_mirror >= 0)
                     w = power_heuristic(via_pdf_sa, mirror_environment_pdf_sa(scene_, mirrors_->list[size_t(via_mirror)],
                                                                              via_x, size_t(env), d));
-                L += beta * le * w;
+                const Rgb c = beta * le * w;
+                L += c;
+                if (lpe) lpe->emit(c);
             }
             break;
         }
@@ -112,7 +114,9 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
                     w = power_heuristic(via_pdf_sa, mirror_light_pdf_sa(scene_, mirrors_->list[size_t(via_mirror)], via_x,
                                                                         size_t(shape.light), hit));
                 }
-                L += beta * le * w;
+                const Rgb c = beta * le * w;
+                L += c;
+                if (lpe) lpe->emit(c);
             }
         }
         if (k >= max_depth) break;  // the next edge would exceed max_depth
@@ -128,11 +132,17 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
         const bool nondelta = bsdf_has_nondelta(bsdf);
         if (nee && nondelta) {
             sampler.start_dimension(dims::camera_walk(k, dims::kDirect));
-            L += beta * sample_direct(hit, shading, wo_local, bsdf, sampler, stats);
+            const Rgb c = beta * sample_direct(hit, shading, wo_local, bsdf, sampler, stats);
+            L += c;
+            if (lpe) lpe->emit_via(bsdf, c);
         }
         // The connector's chain has two more edges: x -> mirror -> light.
         const bool connector = mirrors_ && nondelta && k + 2 <= max_depth;
-        if (connector) L += beta * sample_direct_via_mirrors(hit, shading, wo_local, bsdf, k, sampler, stats);
+        if (connector) {
+            const Rgb c = beta * sample_direct_via_mirrors(hit, shading, wo_local, bsdf, k, sampler, stats);
+            L += c;
+            if (lpe) lpe->emit_via_mirror(bsdf, c);  // x, then the mirror (S), then L
+        }
 
         sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
         float uc = sampler.next_1d();
@@ -156,6 +166,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats) const {
         origin_p = hit.p;
         origin_pdf_sa = bs->pdf_sa;
         prev_delta = bs->is_delta();
+        if (lpe) lpe->scatter(bsdf, prev_delta);
         prev_pdf_sa = bs->pdf_sa;
         prev_p = hit.p;
         if (bs->lobe & kLobeTransmission) eta_scale *= sqr(bs->eta);

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "integrator/lpe_tracker.h"
 #include "sampling/sampler.h"
 #include "scene/scene.h"
 
@@ -37,8 +38,10 @@ class PathTracer {
 public:
     PathTracer(const Scene& scene, const PathTracerSettings& settings);
     // Radiance along `ray`. Called concurrently from render threads; touches only `sampler` and
-    // `stats`. Bounce k draws from the camera-walk block of vertex k (see sampling/sampler.h).
-    Rgb radiance(Ray ray, Sampler& sampler, TracerStats& stats) const;
+    // `stats` (and `lpe`). Bounce k draws from the camera-walk block of vertex k (see
+    // sampling/sampler.h). With `lpe` (reset by the caller), every contribution is also offered
+    // to the AOVs; the returned radiance is bit-identical either way.
+    Rgb radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLpeTracker* lpe = nullptr) const;
 
 private:
     Rgb sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,

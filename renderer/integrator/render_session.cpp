@@ -43,8 +43,11 @@ void RenderSession::check_settings(const RenderSettings& settings) {
 RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
     : scene_(scene), settings_(settings), tracer_(scene, tracer_settings(settings.integrator)), film_(scene.desc().sensor.film) {
     check_settings(settings);
+    const FilmDesc& fd = scene.desc().sensor.film;
+    if (!fd.aovs.empty()) aovs_ = std::make_unique<AovImages>(fd, fd.aovs);
     if (settings.integrator.type != IntegratorType::Path) {
         bdpt_ = std::make_unique<BdptTracer>(scene, settings.integrator);
+        if (aovs_) bdpt_->set_aovs(&aovs_->lpes());
         if (settings.strategy_images_max_k > 0)
             strategies_ = std::make_unique<StrategyImages>(film_.crop(), settings.strategy_images_max_k,
                                                            bdpt_->plan().t0 && bdpt_->strategies().allows(2, 0));
@@ -84,6 +87,8 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
     std::vector<Vec3d>& splats = batch_splats_;
     sums.assign(size_t(crop.area()), Vec3d(0.0));
     splats.assign(size_t(crop.area()), Vec3d(0.0));
+    AovImages* aovs = aovs_.get();
+    if (aovs) aovs->begin_batch();
     auto index = [&](int x, int y) { return size_t(y - crop.y0) * size_t(crop.width()) + size_t(x - crop.x0); };
     const Filter& filter = film_.filter();
     // Which tiles ran: a batch cut at the time limit keeps only their pixels (below).
@@ -133,6 +138,9 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                                         continue;
                                     }
                                     sums[index(x, y)] += Vec3d(L);
+                                    if (aovs)
+                                        for (size_t a = 0; a < aovs->size(); ++a)
+                                            aovs->add_camera(a, index(x, y), scratch.aov_camera[a]);
                                     out.insert(out.end(), local.begin(), local.end());
                                     if (per)
                                         for (const auto& c : *per) {
@@ -152,13 +160,19 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
         for (const auto& list : tile_splats)
             for (const Splat& sp : list)
                 for_each_filter_pixel(filter, crop, sp.film, [&](int x, int y, double f) {
-                    splats[index(x, y)] += Vec3d(sp.value) * (f * inv_light_paths_per_sample);
+                    const Vec3d v = Vec3d(sp.value) * (f * inv_light_paths_per_sample);
+                    splats[index(x, y)] += v;
+                    if (sp.aov_mask) aovs->add_splat(sp.aov_mask, index(x, y), v);
                 });
     }
     if (aborted()) return;
     if (!pass_cut_.load(std::memory_order_relaxed)) {
         for (int y = crop.y0; y < crop.y1; ++y)
-            for (int x = crop.x0; x < crop.x1; ++x) film_.add_weighted(x, y, sums[index(x, y)] + splats[index(x, y)], 1.0);
+            for (int x = crop.x0; x < crop.x1; ++x) {
+                film_.add_weighted(x, y, sums[index(x, y)] + splats[index(x, y)], 1.0);
+                if (aovs) aovs->add_batch(index(x, y), nullptr);
+            }
+        if (aovs) aovs->end_batch_complete();
         return;
     }
     // Cut at the time limit: the light paths that ran are a uniform subset of the batch's (their
@@ -174,13 +188,17 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
         if (!ran[t]) continue;
         const Rect& r = tiles[t];
         for (int y = r.y0; y < r.y1; ++y)
-            for (int x = r.x0; x < r.x1; ++x)
+            for (int x = r.x0; x < r.x1; ++x) {
                 film_.add_weighted(x, y, sums[index(x, y)] + splats[index(x, y)] * rescale, 1.0);
+                if (aovs) aovs->add_batch(index(x, y), &rescale);
+            }
     }
 }
 
 void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats) {
     const Sensor& sensor = scene_.sensor();
+    std::optional<CameraLpeTracker> lpe;
+    if (aovs_) lpe.emplace(aovs_->lpes());
     const uint64_t width = uint64_t(sensor.width);
     for (int y = tile.y0; y < tile.y1; ++y) {
         for (int x = tile.x0; x < tile.x1; ++x) {
@@ -193,13 +211,15 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
                 Vec2 u_lens = sampler.next_2d();
                 Vec2 pos = film_.sample_position(x, y, u_film);
                 Ray ray = sensor.generate_ray(pos, u_lens);
-                Rgb L = tracer_.radiance(ray, sampler, stats);
+                if (lpe) lpe->reset();
+                Rgb L = tracer_.radiance(ray, sampler, stats, lpe ? &*lpe : nullptr);
                 ++stats.samples;
                 if (!is_finite(L)) {
                     ++stats.nonfinite;  // discarded: one bad sample must not poison a pixel
                     continue;
                 }
                 film_.add_sample(x, y, L);
+                if (lpe) aovs_->add_samples(x, y, *lpe);
             }
         }
     }

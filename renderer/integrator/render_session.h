@@ -15,6 +15,7 @@
 #include <tbb/task_arena.h>
 
 #include "film/film.h"
+#include "integrator/aov_images.h"
 #include "integrator/bdpt_tracer.h"
 #include "integrator/path_tracer.h"
 #include "integrator/strategy_images.h"
@@ -84,7 +85,11 @@ public:
     // Per-strategy images when settings().strategy_images_max_k > 0 (else null).
     const StrategyImages* strategy_images() const { return strategies_.get(); }
 
-    // Strategies of the light and bdpt integrators the scene cannot use; see pathspace/classify.h.
+    // Light path expression outputs of the scene's film (`aov`), null when it names none.
+    // Read like film(): between passes.
+    const AovImages* aovs() const { return aovs_.get(); }
+    AovImages* aovs() { return aovs_.get(); }
+
 private:
     void render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats);
     // Any thread: whether a tile may still start in this pass (false once the pass is cut).
@@ -101,6 +106,7 @@ private:
     PathTracer tracer_;
     std::unique_ptr<BdptTracer> bdpt_;
     std::unique_ptr<StrategyImages> strategies_;
+    std::unique_ptr<AovImages> aovs_;
     tbb::enumerable_thread_specific<std::vector<StrategyContribution>> sample_strategies_;
     Film film_;
     tbb::enumerable_thread_specific<TracerStats> stats_;  // cache-aligned per thread

@@ -13,6 +13,7 @@
 #include "bsdf/bsdf.h"
 #include "math/transform.h"
 #include "math/vec.h"
+#include "pathspace/lpe.h"
 #include "sampling/sampler_type.h"
 #include "texture/texture_types.h"
 
@@ -65,6 +66,9 @@ struct FilmDesc {
     // [x0, y0, x1, y1) in pixels; defaults to the whole film.
     std::array<int, 4> crop{0, 0, 0, 0};
     bool has_crop = false;
+    // Light path expression outputs (film key `aov`, `omega render --aov`), in file order; each
+    // is an image of its own (pathspace/lpe.h, integrator/aov_images.h).
+    std::vector<AovDesc> aovs;
 };
 
 // When a render stops: whichever given condition is met first. None given = 64 spp.

@@ -1,4 +1,6 @@
 #include "scene/scene_parser.h"
+
+#include "pathspace/lpe.h"
 #include "scene/scene_files.h"
 
 #include <fmt/format.h>
@@ -468,6 +470,24 @@ void parse_integrator(ParamBag b, IntegratorDesc& it) {
     b.check_unused();
 }
 
+// aov: {NAME: EXPR, ...}: names and expressions are checked here, so a bad one fails at its line.
+void parse_aovs(const ParamValue& v, std::vector<AovDesc>& out) {
+    if (!v.is_map()) v.fail("expected a mapping {NAME: \"L S+ D E\", ...}, got " + v.describe());
+    ParamBag bag = v.as_bag();
+    for (const std::string& name : bag.keys()) {
+        ParamValue e = *bag.get(name);
+        if (!e.is_scalar()) e.fail("expected a light path expression such as \"L S+ D E\", got " + e.describe());
+        out.push_back({name, e.as_string()});
+        try {
+            validate_aov_name(name);
+            compile_lpe(out.back().expr);
+        } catch (const std::invalid_argument& err) {
+            e.fail(err.what());
+        }
+    }
+    if (out.size() > size_t(kMaxAovs)) v.fail("at most " + std::to_string(kMaxAovs) + " aovs per film");
+}
+
 void parse_film(ParamBag b, FilmDesc& f) {
     f.width = b.get_int("width", f.width, 1, 1 << 16);
     f.height = b.get_int("height", f.height, 1, 1 << 16);
@@ -494,6 +514,7 @@ void parse_film(ParamBag b, FilmDesc& f) {
     } else {
         f.crop = {0, 0, f.width, f.height};
     }
+    if (auto v = b.get("aov")) parse_aovs(*v, f.aovs);
     b.check_unused();
 }
 

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "bsdf/metals.h"
+#include "scene/scene_writer.h"
 #include "scene/test_helpers.h"
 
 using namespace omega;
@@ -416,4 +417,25 @@ TEST(SceneParser, SamplerKey) {
               SamplerType::Sobol);
     EXPECT_NE(parse_error("omega: 1\nsampler: {type: halton}\n").find("scene.yaml:2: sampler.type:"), std::string::npos);
     EXPECT_EQ(parse_error("omega: 1\nsampler: {type: sobol, seed: 3}\n"), "scene.yaml:2: sampler.seed: unknown key");
+}
+
+TEST(SceneParser, FilmAovs) {
+    const std::string light = "lights: [{type: point, position: [0, 1, 0], intensity: 1}]\n";
+    SceneDesc d = parse_scene_string(
+        "omega: 1\nsensor:\n  film: {width: 8, height: 8, aov: {caustics: \"L S+ D E\", direct: L D E}}\n" + light,
+        "scene.yaml");
+    ASSERT_EQ(d.sensor.film.aovs.size(), 2u);
+    EXPECT_EQ(d.sensor.film.aovs[0], (AovDesc{"caustics", "L S+ D E"}));
+    EXPECT_EQ(d.sensor.film.aovs[1], (AovDesc{"direct", "L D E"}));
+    // Written back and read again: the same AOVs, in the same order.
+    SceneDesc again = parse_scene_string(write_scene_yaml(d), "again.yaml");
+    EXPECT_EQ(again.sensor.film.aovs, d.sensor.film.aovs);
+    // Errors name the line and key, the column of the expression, the bad name.
+    const std::string bad_expr = parse_error("omega: 1\nsensor:\n  film:\n    aov: {x: \"L ( E\"}\n" + light);
+    EXPECT_NE(bad_expr.find("scene.yaml:4:"), std::string::npos) << bad_expr;
+    EXPECT_NE(bad_expr.find("column 6: expected ')'"), std::string::npos) << bad_expr;
+    const std::string bad_name = parse_error("omega: 1\nsensor:\n  film:\n    aov: {\"a-b\": \"L E\"}\n" + light);
+    EXPECT_NE(bad_name.find("aov name 'a-b'"), std::string::npos) << bad_name;
+    EXPECT_NE(parse_error("omega: 1\nsensor:\n  film: {aov: [L E]}\n" + light).find("expected a mapping"),
+              std::string::npos);
 }

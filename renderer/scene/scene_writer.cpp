@@ -268,6 +268,13 @@ std::string write_scene_yaml(const SceneDesc& d, const std::string& base_dir, co
     o += fmt::format("  film: {{width: {}, height: {}, filter: {}", f.width, f.height, filter_name(f.filter));
     if (f.filter == FilterType::Gaussian) o += fmt::format(", stddev: {}", num(f.gaussian_stddev));
     if (f.has_crop) o += fmt::format(", crop: [{}, {}, {}, {}]", f.crop[0], f.crop[1], f.crop[2], f.crop[3]);
+    if (!f.aovs.empty()) {
+        // Names are identifiers and expressions use no quote or backslash (the parser checked both).
+        o += ", aov: {";
+        for (size_t i = 0; i < f.aovs.size(); ++i)
+            o += fmt::format("{}{}: \"{}\"", i ? ", " : "", f.aovs[i].name, f.aovs[i].expr);
+        o += "}";
+    }
     o += "}\n";
     if (s.halt.spp) o += fmt::format("  spp: {}\n", *s.halt.spp);
     if (s.halt.time_s) o += fmt::format("  time: {}\n", num(*s.halt.time_s));

@@ -3,12 +3,15 @@
 // (the first differing pixel is printed), 2 on a read error.
 // --rel-tol E: equal means |a - b| <= E * max(|a|, |b|) per channel instead of bit-identical, for
 // results whose algebra is exact only to rounding (a merge of partial renders).
+// --layer NAME (repeatable, before the files): also compare the float layer NAME.R/G/B (e.g.
+// aov.direct, aov.direct.var) the same way; a missing layer is a read error.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <string>
+#include <vector>
 
 #include "film/film.h"
 
@@ -36,14 +39,25 @@ int main(int argc, char** argv) {
     argv += 2;
     argc -= 2;
   }
+  std::vector<std::string> layers;
+  while (argc >= 5 && std::string(argv[1]) == "--layer") {
+    layers.push_back(argv[2]);
+    argv += 2;
+    argc -= 2;
+  }
   if (argc != 3) {
     std::fprintf(stderr, "usage: omega_exr_compare [--rel-tol E] FULL.exr PART.exr\n");
     return 2;
   }
   omega::ExrImage a, b;
+  std::vector<std::vector<float>> la, lb;
   try {
     a = omega::read_exr(argv[1]);
     b = omega::read_exr(argv[2]);
+    for (const std::string& l : layers) {
+      la.push_back(omega::read_exr_layer(argv[1], l));
+      lb.push_back(omega::read_exr_layer(argv[2], l));
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "omega_exr_compare: %s\n", e.what());
     return 2;
@@ -61,6 +75,11 @@ int main(int argc, char** argv) {
       std::size_t ib = 3 * (std::size_t(y) * b.width + x);
       std::size_t ia = 3 * (std::size_t(y + b.y0 - a.y0) * a.width + (x + b.x0 - a.x0));
       bool same = agree(&a.rgb[ia], &b.rgb[ib], tol) && (a.var.empty() || agree(&a.var[ia], &b.var[ib], tol));
+      for (std::size_t l = 0; l < layers.size(); ++l)
+        if (!agree(&la[l][ia], &lb[l][ib], tol)) {
+          std::fprintf(stderr, "layer %s: pixel (%d, %d) differs\n", layers[l].c_str(), x + b.x0, y + b.y0);
+          return 1;
+        }
       if (!same) {
         std::fprintf(stderr, "pixel (%d, %d) differs: %.9g %.9g %.9g vs %.9g %.9g %.9g (var %.9g %.9g %.9g vs %.9g %.9g %.9g)\n",
                      x + b.x0, y + b.y0, a.rgb[ia], a.rgb[ia + 1], a.rgb[ia + 2], b.rgb[ib], b.rgb[ib + 1], b.rgb[ib + 2],

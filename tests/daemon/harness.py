@@ -120,8 +120,9 @@ def local_render(scene_bytes, out, spp, seed=0, workdir=None, integrator=None):
                    check=True, timeout=120, stdout=subprocess.DEVNULL)
 
 
-def exr_equal(full, part):
-    r = subprocess.run([EXR_COMPARE, full, part], capture_output=True, text=True, timeout=60)
+def exr_equal(full, part, layers=()):
+    extra = [a for l in layers for a in ("--layer", l)]
+    r = subprocess.run([EXR_COMPARE] + extra + [full, part], capture_output=True, text=True, timeout=60)
     if r.returncode != 0:
         sys.stderr.write(r.stderr)
     return r.returncode == 0

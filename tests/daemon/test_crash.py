@@ -25,7 +25,20 @@ def test_kill9_and_resume(tmp, daemons):
         kill9_and_resume(work, daemons, integrator, spp, small_cornell(width=w, height=h_).replace(b"max_depth: 65", b"max_depth: 8"))
 
 
-def kill9_and_resume(tmp, daemons, integrator, SPP, scene):
+def test_kill9_and_resume_aovs(tmp, daemons):
+    # Light path expression outputs are in the checkpoint too: after the kill their layers resume
+    # bit-identically with the beauty.
+    scene = small_cornell(width=64, height=48).replace(b"max_depth: 65", b"max_depth: 8")
+    scene = scene.replace(b"film: {width: 64", b'film: {aov: {direct: "L D E", indirect: "L D D+ E"}, width: 64')
+    assert b"aov:" in scene
+    for integrator in ("path", "bdpt"):
+        work = os.path.join(tmp, integrator)
+        os.makedirs(work)
+        kill9_and_resume(work, daemons, integrator, SPP, scene,
+                         layers=("aov.direct", "aov.direct.var", "aov.indirect", "aov.indirect.var"))
+
+
+def kill9_and_resume(tmp, daemons, integrator, SPP, scene, layers=()):
     local = os.path.join(tmp, "local.exr")
     local_render(scene, local, SPP, 11, tmp, integrator=integrator)
     d = Daemon(tmp, config="max_running: 1\n").start()
@@ -52,7 +65,7 @@ def kill9_and_resume(tmp, daemons, integrator, SPP, scene):
     with open(out, "wb") as fh:
         fh.write(f["_payload"])
     assert f["spp"] == SPP
-    assert exr_equal(local, out), f"{integrator}: resumed render differs from the uninterrupted one"
+    assert exr_equal(local, out, layers), f"{integrator}: resumed render differs from the uninterrupted one"
     wait_state(c, queued, {"done"})
     d.stop()
     print(f"  {integrator}: killed at >= 8 spp, resumed from {resumed_from} spp, finished at {SPP} spp, bit-identical")
@@ -110,5 +123,6 @@ def test_sigterm_drain_second_sigterm_and_sighup(tmp, daemons):
 if __name__ == "__main__":
     t = Test()
     t.run(test_kill9_and_resume)
+    t.run(test_kill9_and_resume_aovs)
     t.run(test_sigterm_drain_second_sigterm_and_sighup)
     t.exit()

@@ -57,6 +57,32 @@ def test_stream_and_fetch_equal_local_render(tmp, daemons):
     assert "job 2: done" in d.log()
 
 
+def test_aovs_in_tiles_and_fetch(tmp, daemons):
+    """A scene whose film names light path expression outputs: every streamed tile and the
+    fetched image carry aov.NAME layers bit-identical to a local render's."""
+    scene = small_cornell().replace(b"film: {width: 80", b'film: {aov: {direct: "L D E", indirect: "L D D+ E"}, width: 80')
+    assert b"aov:" in scene
+    layers = ("aov.direct", "aov.direct.var", "aov.indirect", "aov.indirect.var")
+    local = os.path.join(tmp, "local-aov.exr")
+    local_render(scene, local, SPP, SEED, tmp)
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    c = d.client()
+    a = c.submit(scene, name="cornell-aov", seed=SEED, halt_=op.halt(spp=SPP))
+    assert a["type"] == "accepted", a
+    tiles, progress, done = watch(c, a["job"])
+    assert done["state"] == "done", done
+    for (rect, (h, payload)) in tiles.items():
+        p = os.path.join(tmp, f"aov-tile-{'-'.join(map(str, rect))}.exr")
+        write(p, payload)
+        assert exr_equal(local, p, layers), f"tile {rect} differs from the local render"
+    fetched = c.job("fetch", a["job"])
+    p = os.path.join(tmp, "aov-fetched.exr")
+    write(p, fetched["_payload"])
+    assert exr_equal(local, p, layers), "fetched image differs from the local render"
+    c.close()
+
+
 def test_mesh_asset_cached_and_late_subscriber(tmp, daemons):
     scene = small_cornell().replace(
         b"shapes:\n", b"shapes:\n  - {type: mesh, file: meshes/tri.obj, material: FloorBSDF}\n", 1)
@@ -140,5 +166,6 @@ if __name__ == "__main__":
     t = Test()
     t.run(test_tiles_stream_before_their_pass_ends)
     t.run(test_stream_and_fetch_equal_local_render)
+    t.run(test_aovs_in_tiles_and_fetch)
     t.run(test_mesh_asset_cached_and_late_subscriber)
     t.exit()

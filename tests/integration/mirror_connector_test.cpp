@@ -91,6 +91,39 @@ TEST(MirrorConnector, PointLightInPlanarMirrorMatchesTheVirtualLight) {
     EXPECT_LT(zp.z, -20);
 }
 
+// Light path expressions see the connector's paths as what they are: light, mirror, floor, eye.
+// With max_depth 3 the image is exactly `L D E` (direct) plus `L S D E` (the mirror's share),
+// for the path tracer (next-event estimation through the mirror) and bdpt (its connector
+// strategy); the mirror's share matches its closed form, the virtual light alone.
+TEST(MirrorConnector, LightPathExpressionsSeeTheMirrorChain) {
+    for (IntegratorType type : {IntegratorType::Path, IntegratorType::Bdpt}) {
+        SceneDesc d = parse(ceiling_scene(kPointLight, kPlaneMirror, 3));
+        d.integrator.type = type;
+        d.sensor.film.aovs = {{"direct", "L D E"}, {"mirror", "L S D E"}};
+        auto r = test::render(d, 32, 13);
+        ASSERT_NE(r.session->aovs(), nullptr);
+        const Film& direct = r.session->aovs()->films()[0].film;
+        const Film& mirror = r.session->aovs()->films()[1].film;
+        double beauty = 0, parts = 0, mirror_sum = 0, expected_mirror = 0;
+        const Sensor& cam = r.scene->sensor();
+        for (int y = 0; y < 24; ++y)
+            for (int x = 0; x < 24; ++x) {
+                beauty += r.film().pixel(x, y).mean.x;
+                parts += direct.pixel(x, y).mean.x + mirror.pixel(x, y).mean.x;
+                mirror_sum += mirror.pixel(x, y).mean.x;
+                Ray ray = cam.generate_ray({x + 0.5f, y + 0.5f}, {0.5f, 0.5f});
+                const double t = -double(ray.o.y) / ray.d.y, px = ray.o.x + t * ray.d.x, pz = ray.o.z + t * ray.d.z;
+                const double h = 2 * kMirrorY - kLightY, r2 = px * px + pz * pz + h * h;
+                expected_mirror += kRho / kPiD * kR * kI * h / (r2 * std::sqrt(r2));
+            }
+        const char* name = type == IntegratorType::Path ? "path" : "bdpt";
+        std::printf("[mirror] %s: beauty %.6f, direct + mirror %.6f, mirror %.5f (closed form %.5f)\n", name, beauty, parts,
+                    mirror_sum, expected_mirror);
+        EXPECT_NEAR(parts, beauty, 1e-5 * beauty) << name;
+        EXPECT_NEAR(mirror_sum, expected_mirror, 0.005 * expected_mirror) << name;
+    }
+}
+
 // An area light, a sphere that lights both the floor and the mirror. BSDF sampling reaches the light through the mirror too, so the
 // connector is weighed against it; with weights that did not sum to 1 the image would differ
 // from the plain path tracer's, which weighs that chain 1.

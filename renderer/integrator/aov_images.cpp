@@ -1,0 +1,35 @@
+#include "integrator/aov_images.h"
+
+namespace omega {
+
+AovImages::AovImages(const FilmDesc& desc, const std::vector<AovDesc>& aovs) : lpes_(aovs) {
+    for (const AovDesc& a : aovs) films_.push_back({a.name, a.expr, Film(desc)});
+}
+
+void AovImages::begin_batch() {
+    // A batch that reached every pixel left the buffers zero (add_batch clears what it adds), so
+    // they are zeroed here only after a cut or aborted batch: one pass over them per batch.
+    if (clean_) {
+        clean_ = false;
+        return;
+    }
+    const size_t n = films_.empty() ? 0 : size_t(films_.front().film.crop().area());
+    camera_.resize(films_.size());
+    splats_.resize(films_.size());
+    for (size_t a = 0; a < films_.size(); ++a) {
+        camera_[a].assign(n, Vec3d(0.0));
+        splats_[a].assign(n, Vec3d(0.0));
+    }
+}
+
+void AovImages::add_batch(size_t pixel, const double* rescale) {
+    for (size_t a = 0; a < films_.size(); ++a) {
+        Vec3d& c = camera_[a][pixel];
+        Vec3d& sp = splats_[a][pixel];
+        const Vec3d v = rescale ? c + sp * *rescale : c + sp;
+        films_[a].film.add_weighted_at(pixel, v, 1.0);
+        c = sp = Vec3d(0.0);
+    }
+}
+
+}  // namespace omega
