@@ -34,6 +34,19 @@ double light_origin_density(const Scene& scene, const PathVertex& v0) {
 
 double light_endpoint_density(const Scene& scene, const PathVertex& v0) { return light_origin_density(scene, v0); }
 
+PathVertex light_sample_vertex(size_t light, const LightSample& ls) {
+    PathVertex v;
+    v.kind = VertexKind::Light;
+    v.light = int(light);
+    v.infinite = ls.infinite;
+    v.dir = -ls.wi;
+    v.hit.p = ls.p;
+    v.hit.planar = false;
+    v.hit.ng = ls.n;
+    v.hit.p_error = ls.p_error;
+    return v;
+}
+
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
                             const PathVertex* sampled_sensor, const PlanarMirrors* mirrors) {
@@ -221,14 +234,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         const Light& l = scene.lights()[li];
         auto ls = light_sample_li(scene, l, z.p(), sampler.next_2d());
         if (!ls || ls->pdf_sa <= 0 || is_black(ls->Li)) return std::nullopt;
-        sampled.kind = VertexKind::Light;
-        sampled.light = int(li);
-        sampled.infinite = ls->infinite;
-        sampled.dir = -ls->wi;
-        sampled.hit.p = ls->p;
-        sampled.hit.planar = false;
-        sampled.hit.ng = ls->n;
-        sampled.hit.p_error = ls->p_error;
+        sampled = light_sample_vertex(li, *ls);
         sampled_light = &sampled;
         Rgb f = vertex_f(z, ls->wi, TransportMode::Radiance) * absdot(ls->wi, z.hit.ns);
         if (is_black(f)) return std::nullopt;

@@ -47,6 +47,8 @@ std::optional<Connection> connect_lens(const Scene& scene, const std::vector<Pat
 // Density of a light endpoint v0 from the light side: selection pmf x its position density (area
 // measure), or x its direction density for a light at infinity; the pmf alone for a point light.
 double light_endpoint_density(const Scene& scene, const PathVertex& v0);
+// The light endpoint that next-event estimation sampled (strategy s = 1), as a path vertex.
+PathVertex light_sample_vertex(size_t light, const LightSample& ls);
 
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,

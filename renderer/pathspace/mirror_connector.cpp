@@ -139,15 +139,7 @@ std::optional<LightChain> sample_light_chain(const Scene& scene, const PlanarMir
     out.pdf_bsdf_sa = bsdf_pdf_sa(bsdf, wo_local, wi_local, TransportMode::Radiance);
     out.L = f * b->weight * ls->Li / out.pdf_light_sa;
     out.mirror = b->hit;
-    PathVertex& v = out.light_vertex;
-    v.kind = VertexKind::Light;
-    v.light = int(li);
-    v.infinite = ls->infinite;
-    v.dir = -ls->wi;
-    v.hit.p = ls->p;
-    v.hit.planar = false;
-    v.hit.ng = ls->n;
-    v.hit.p_error = ls->p_error;
+    out.light_vertex = light_sample_vertex(li, *ls);
     return out;
 }
 
