@@ -4,14 +4,16 @@ of the first veth, and `omega worker --connect tcp:ADDR:PORT` runs in each names
 auth (role worker), the second host reaching the daemon through its default route. A job with
 `workers: 2` must be rendered by both hosts (omegad logs each worker's peer address, which must
 be the namespace's own), and its result must equal `omega merge` of the same units rendered
-locally bit for bit and `omega render --spp N` within 1e-6 (harness.check_units_merge).
+locally bit for bit and `omega render --spp N` within 1e-6 (harness.check_units_merge). A worker
+with a wrong token is refused over the veth.
 Skips (exit 77) only when the kernel refuses network namespaces or veth pairs.
 Usage: python3 test_workers_netns.py OMEGAD OMEGA EXR_COMPARE SOURCE_DIR"""
 import os
 import re
+import subprocess
 import sys
 
-from harness import Daemon, Test, check_units_merge, free_port, omega, small_cornell, start_worker, tcp_env
+from harness import OMEGA, Daemon, Test, check_units_merge, free_port, omega, small_cornell, start_worker, tcp_env
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from netns_hosts import NamespacesRefused, NetnsHosts  # noqa: E402
@@ -46,6 +48,13 @@ def test_workers_on_two_hosts(tmp, daemons):
         # address proves each came over its own veth, not through loopback.
         for name, host in (("hostA", a), ("hostB", b)):
             d.wait_log(rf"connection \d+ \({re.escape(host.addr)}:\d+\): worker 'conn \d+ \({name}\)' with 1 thread", 30)
+        # The same address with a wrong token: refused over the veth as over loopback.
+        r = subprocess.run(b.wrap() + [OMEGA, "worker", "--connect", server, "--once", "--threads", "1",
+                                       "--cache", os.path.join(tmp, "cache-bad")],
+                           env=tcp_env(server, "farm", "wrong-token-0123456789"), capture_output=True, text=True,
+                           timeout=60)
+        assert r.returncode != 0 and "authentication failed" in r.stderr, (r.returncode, r.stderr)
+        d.wait_log(rf"connection \d+ \({re.escape(b.addr)}:\d+\): authentication failed for user 'farm'", 10)
         scene = os.path.join(tmp, "scene.yaml")
         with open(scene, "wb") as f:
             f.write(small_cornell(W, H, SPP))
