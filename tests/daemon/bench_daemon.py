@@ -9,7 +9,7 @@ import tempfile
 import threading
 import time
 
-from harness import Daemon, OMEGA, op, small_cornell, wait_state, watch
+from harness import Daemon, OMEGA, cpu_seconds, op, small_cornell, wait_state, watch
 
 SIZE = int(sys.argv[5]) if len(sys.argv) > 5 else 256
 SPP = int(sys.argv[6]) if len(sys.argv) > 6 else 64
@@ -31,13 +31,6 @@ def first_tile(d, size, spp):
     t_tile = time.monotonic() - t0
     c.job("cancel", a["job"])
     return t_acc, t_tile
-
-
-def cpu_seconds(pid):
-    """User + system CPU time of a process: what it spent, whatever else shares the cores."""
-    with open(f"/proc/{pid}/stat") as f:
-        fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def throughput(d, watchers):

@@ -28,7 +28,7 @@ def small_cornell(width=80, height=48, spp=16):
 
 
 class Daemon:
-    def __init__(self, workdir, threads=2, config="", state_dir=None, name="omegad", tcp_port=0):
+    def __init__(self, workdir, threads=2, config="", state_dir=None, name="omegad", tcp_port=0, listen=()):
         self.workdir = workdir
         self.state_dir = state_dir or os.path.join(workdir, "state")
         self.sock = os.path.join(workdir, name + ".sock")
@@ -38,6 +38,7 @@ class Daemon:
             f.write(base + config)
         self.threads = threads
         self.tcp_port = tcp_port  # 0: any free port; a fixed one lets clients reconnect after a restart
+        self.listen = list(listen)  # more --listen addresses (e.g. a veth's, for workers in a netns)
         self.lines = []
         self.lock = threading.Lock()
         self.proc = None
@@ -51,6 +52,8 @@ class Daemon:
         self.lines = []
         args = [OMEGAD, "--config", self.config_path, "--state-dir", self.state_dir,
                 "--listen", self.unix, "--listen", f"tcp:127.0.0.1:{self.tcp_port}", "--threads", str(self.threads)]
+        for a in self.listen:
+            args += ["--listen", a]
         self.proc = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
         threading.Thread(target=self._pump, args=(self.proc,), daemon=True).start()
         m = self.wait_log(r"omegad ready: listening on .*tcp:([0-9.]+:\d+)", timeout)
@@ -176,6 +179,72 @@ def watch(c, job, timeout=120):
             return tiles, progress, h
         else:
             raise AssertionError(f"unexpected frame {h}")
+
+
+def cpu_seconds(pid):
+    """User + system CPU time of a live process: what it spent, whatever else shares the cores."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def tcp_env(addr, user, token):
+    """The environment of an `omega` client that logs in over TCP as USER with TOKEN (the token
+    travels in the environment, never on the command line, which ps shows)."""
+    return dict(os.environ, OMEGA_HOST=addr, OMEGA_USER=user, OMEGA_TOKEN=token)
+
+
+def omega(args, env, check=True, timeout=120):
+    """Runs the omega client; with check, a non-zero exit fails the test with its stderr."""
+    r = subprocess.run([OMEGA] + args, env=env, capture_output=True, text=True, timeout=timeout)
+    if check and r.returncode != 0:
+        raise AssertionError(f"omega {' '.join(args)} exited {r.returncode}: {r.stderr}")
+    return r
+
+
+def wait_file(path, pattern, timeout):
+    """Waits until a log file (a worker's stderr) matches PATTERN; returns the match."""
+    deadline = time.monotonic() + timeout * SLOWDOWN
+    while time.monotonic() < deadline:
+        with open(path) as f:
+            m = re.search(pattern, f.read())
+        if m:
+            return m
+        time.sleep(0.02)
+    with open(path) as f:
+        raise AssertionError(f"{path}: no /{pattern}/ within {timeout * SLOWDOWN} s:\n{f.read()[-3000:]}")
+
+
+def start_worker(addr, name, tmp, env, wrap=()):
+    """`omega worker --connect ADDR` with one thread and its own cache, its stderr in
+    TMP/worker-NAME.log. WRAP prefixes the command (e.g. `ip netns exec NS`). Returns (proc, log)."""
+    log = os.path.join(tmp, f"worker-{name}.log")
+    with open(log, "w") as lf:
+        p = subprocess.Popen(list(wrap) + [OMEGA, "worker", "--connect", addr, "--threads", "1", "--name", name,
+                                           "--cache", os.path.join(tmp, "cache-" + name)],
+                             env=env, stdout=subprocess.DEVNULL, stderr=lf)
+    return p, log
+
+
+def check_units_merge(tmp, scene, job, env, unit, units):
+    """The worker tests' verdict (docs/farm.md "Workers"): the job's result equals `omega merge`
+    of the same sample ranges rendered locally bit for bit, and `omega render --spp` of the whole
+    range within the merge bound (1e-6 relative)."""
+    out = os.path.join(tmp, "out.exr")
+    omega(["fetch", str(job), "-o", out], env)
+    parts = []
+    for i in range(units):
+        p = os.path.join(tmp, f"part{i}.exr")
+        omega(["render", scene, "--samples", f"{i * unit}:{(i + 1) * unit}", "-o", p, "-q", "--threads", "2"], env)
+        parts.append(p)
+    merged = os.path.join(tmp, "merged.exr")
+    omega(["merge"] + parts + ["-o", merged, "-q"], env)
+    r = subprocess.run([EXR_COMPARE, merged, out], capture_output=True, text=True)
+    assert r.returncode == 0, "result differs from omega merge of the same units: " + r.stdout + r.stderr
+    local = os.path.join(tmp, "local.exr")
+    omega(["render", scene, "--spp", str(unit * units), "-o", local, "-q", "--threads", "2"], env)
+    r = subprocess.run([EXR_COMPARE, "--rel-tol", "1e-6", local, out], capture_output=True, text=True)
+    assert r.returncode == 0, "result differs from omega render --spp beyond 1e-6: " + r.stdout + r.stderr
 
 
 SANITIZER_REPORT = re.compile(r"WARNING: ThreadSanitizer|ERROR: AddressSanitizer|ERROR: LeakSanitizer|runtime error: ")

@@ -8,10 +8,10 @@ Usage: python3 test_workers.py OMEGAD OMEGA EXR_COMPARE SOURCE_DIR"""
 import os
 import re
 import signal
-import subprocess
 import time
 
-from harness import (EXR_COMPARE, OMEGA, SLOWDOWN, Daemon, Test, free_port, op, small_cornell, wait_state)
+from harness import (SLOWDOWN, Daemon, Test, check_units_merge, free_port, omega, op, small_cornell, start_worker,
+                     tcp_env, wait_file, wait_state)
 
 ALICE, BOB, WORKER = "alice-token-0123456789", "bob-token-0123456789", "worker-token-0123456789"
 CONFIG = f"""tcp_users:
@@ -24,39 +24,6 @@ SANITIZED = bool(os.environ.get("OMEGA_SANITIZER"))
 # so that a worker killed right after it starts a unit dies in the middle of it.
 W, H, UNIT, UNITS = (64, 48, 64, 6) if SANITIZED else (120, 90, 96, 6)
 SPP = UNIT * UNITS
-
-
-def env(addr, user, token):
-    e = dict(os.environ, OMEGA_HOST=addr, OMEGA_USER=user, OMEGA_TOKEN=token)
-    return e
-
-
-def omega(args, e, check=True, timeout=120):
-    r = subprocess.run([OMEGA] + args, env=e, capture_output=True, text=True, timeout=timeout)
-    if check and r.returncode != 0:
-        raise AssertionError(f"omega {' '.join(args)} exited {r.returncode}: {r.stderr}")
-    return r
-
-
-def start_worker(addr, name, tmp):
-    log = open(os.path.join(tmp, f"worker-{name}.log"), "w")
-    # The token travels in the environment, never on the command line (ps shows that).
-    p = subprocess.Popen([OMEGA, "worker", "--connect", addr, "--threads", "1", "--name", name,
-                          "--cache", os.path.join(tmp, "cache-" + name)],
-                         env=env(addr, "farm", WORKER), stdout=subprocess.DEVNULL, stderr=log)
-    return p, log.name
-
-
-def wait_file(path, pattern, timeout):
-    deadline = time.monotonic() + timeout * SLOWDOWN
-    while time.monotonic() < deadline:
-        with open(path) as f:
-            m = re.search(pattern, f.read())
-        if m:
-            return m
-        time.sleep(0.02)
-    with open(path) as f:
-        raise AssertionError(f"{path}: no /{pattern}/ within {timeout * SLOWDOWN} s:\n{f.read()[-3000:]}")
 
 
 def login(d, user, token):
@@ -75,13 +42,14 @@ def test_workers_exact_through_deaths(tmp, daemons):
     scene = os.path.join(tmp, "scene.yaml")
     with open(scene, "wb") as f:
         f.write(small_cornell(W, H, SPP))
-    alice = env(addr, "alice", ALICE)
+    alice = tcp_env(addr, "alice", ALICE)
+    farm = tcp_env(addr, "farm", WORKER)
     job = int(omega(["submit", scene, "--spp", str(SPP), "--workers", "2", "--unit-spp", str(UNIT), "-q"],
                     alice).stdout.split()[-1])
     workers = []
     try:
-        a, a_log = start_worker(addr, "A", tmp)
-        b, b_log = start_worker(addr, "B", tmp)
+        a, a_log = start_worker(addr, "A", tmp, farm)
+        b, b_log = start_worker(addr, "B", tmp, farm)
         workers += [a, b]
         # A dies by kill -9 in the middle of its second unit: that unit goes back to the queue.
         wait_file(a_log, r"unit \d+: done", 60)
@@ -95,7 +63,7 @@ def test_workers_exact_through_deaths(tmp, daemons):
         d.start()
         d.wait_log(rf"job {job}: on workers \(2 wanted\), \d+ unit\(s\) recorded, [1-9]\d* done", 30)
         # B reconnects by itself; A2 replaces A. A watcher sees the merged image grow.
-        a2, _ = start_worker(addr, "A2", tmp)
+        a2, _ = start_worker(addr, "A2", tmp, farm)
         workers.append(a2)
         w = login(d, "alice", ALICE)
         sid = w.new_id()
@@ -122,32 +90,17 @@ def test_workers_exact_through_deaths(tmp, daemons):
                 p.wait(10)
 
     # Every unit counted once: each range was recorded done exactly once in this daemon life or
-    # the last, and the result equals the local merge of the same ranges bit for bit.
-    out = os.path.join(tmp, "out.exr")
-    omega(["fetch", str(job), "-o", out], alice)
-    parts = []
-    for i in range(UNITS):
-        p = os.path.join(tmp, f"part{i}.exr")
-        omega(["render", scene, "--samples", f"{i * UNIT}:{(i + 1) * UNIT}", "-o", p, "-q", "--threads", "2"], alice)
-        parts.append(p)
-    merged = os.path.join(tmp, "merged.exr")
-    omega(["merge"] + parts + ["-o", merged, "-q"], alice)
-    r = subprocess.run([EXR_COMPARE, merged, out], capture_output=True, text=True)
-    assert r.returncode == 0, "daemon result differs from omega merge of the same units: " + r.stdout + r.stderr
-    local = os.path.join(tmp, "local.exr")
-    omega(["render", scene, "--spp", str(SPP), "-o", local, "-q", "--threads", "2"], alice)
-    r = subprocess.run([EXR_COMPARE, "--rel-tol", "1e-6", local, out], capture_output=True, text=True)
-    assert r.returncode == 0, "daemon result differs from omega render --spp beyond 1e-6: " + r.stdout + r.stderr
+    # the last, so the result equals the local merge of the same ranges bit for bit.
+    check_units_merge(tmp, scene, job, alice, UNIT, UNITS)
 
     # A worker's credentials give units only: never another user's job, nor any control.
-    farm = env(addr, "farm", WORKER)
     for args in (["cancel", str(job)], ["fetch", str(job), "-o", os.path.join(tmp, "x.exr")],
                  ["status", str(job)], ["submit", scene, "--spp", "1"]):
         r = omega(args, farm, check=False)
         assert r.returncode == 3 and "permission_denied" in r.stderr and "is a worker" in r.stderr, (args, r.stderr)
     # And an ordinary user's credentials take no units.
     r = omega(["worker", "--once", "--threads", "1", "--cache", os.path.join(tmp, "cache-bob")],
-              env(addr, "bob", BOB), check=False)
+              tcp_env(addr, "bob", BOB), check=False)
     assert r.returncode == 3 and "may not take work units" in r.stderr, r.stderr
     # Nothing was merged twice: one "done by" line per unit in the daemon's logs after the restart
     # plus the units already done before it.
@@ -162,11 +115,11 @@ def test_cancel_and_pause_reach_workers(tmp, daemons):
     scene = os.path.join(tmp, "scene.yaml")
     with open(scene, "wb") as f:
         f.write(small_cornell(W, H, 4096))
-    alice = env(addr, "alice", ALICE)
+    alice = tcp_env(addr, "alice", ALICE)
     big = UNIT * 64
     job = int(omega(["submit", scene, "--spp", str(big), "--workers", "1", "--unit-spp", str(UNIT * 4), "-q"],
                     alice).stdout.split()[-1])
-    p, log = start_worker(addr, "C", tmp)
+    p, log = start_worker(addr, "C", tmp, tcp_env(addr, "farm", WORKER))
     try:
         wait_file(log, rf"job {job} unit 0: samples", 30)
         omega(["pause", str(job)], alice)

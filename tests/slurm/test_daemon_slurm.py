@@ -19,31 +19,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "support"))
 sys.path.insert(0, os.path.join(HERE, "..", "daemon"))
 from slurm_cluster import SlurmCluster, SlurmUnavailable  # noqa: E402
-from harness import EXR_COMPARE, OMEGA, SLOWDOWN, Daemon, Test, free_port, small_cornell  # noqa: E402
+from harness import (OMEGA, Daemon, Test, check_units_merge, free_port, omega, small_cornell, start_worker,  # noqa: E402
+                     tcp_env, wait_file)
 
 ALICE, WORKER = "alice-token-0123456789", "worker-token-0123456789"
 SANITIZED = bool(os.environ.get("OMEGA_SANITIZER"))
 W, H, UNIT, UNITS = (48, 32, 8, 12) if SANITIZED else (160, 120, 48, 14)
 SPP = UNIT * UNITS
-
-
-def omega(args, e, check=True):
-    r = subprocess.run([OMEGA] + args, env=e, capture_output=True, text=True, timeout=120)
-    if check and r.returncode != 0:
-        raise AssertionError(f"omega {' '.join(args)} exited {r.returncode}: {r.stderr}")
-    return r
-
-
-def wait_file(path, pattern, timeout):
-    deadline = time.monotonic() + timeout * SLOWDOWN
-    while time.monotonic() < deadline:
-        with open(path) as f:
-            m = re.search(pattern, f.read())
-        if m:
-            return m
-        time.sleep(0.02)
-    with open(path) as f:
-        raise AssertionError(f"{path}: no /{pattern}/ within {timeout * SLOWDOWN} s:\n{f.read()[-3000:]}")
 
 
 def test_slurm_workers(tmp, daemons):
@@ -73,7 +55,7 @@ slurm:
         scene = os.path.join(tmp, "scene.yaml")
         with open(scene, "wb") as f:
             f.write(small_cornell(W, H, SPP))
-        alice = dict(os.environ, OMEGA_HOST=addr, OMEGA_USER="alice", OMEGA_TOKEN=ALICE)
+        alice = tcp_env(addr, "alice", ALICE)
         job = int(omega(["submit", scene, "--spp", str(SPP), "--workers", "2", "--unit-spp", str(UNIT), "-q"],
                         alice).stdout.split()[-1])
         m = d.wait_log(rf"job {job}: Slurm job (\d+): 2 worker\(s\) submitted", 30)
@@ -87,12 +69,7 @@ slurm:
         assert WORKER not in script and token in script, script
 
         # One worker by hand, kill -9'ed in the middle of its second unit.
-        log = os.path.join(tmp, "worker-hand.log")
-        with open(log, "w") as lf:
-            hand = subprocess.Popen([OMEGA, "worker", "--connect", addr, "--threads", "1", "--name", "hand",
-                                     "--cache", os.path.join(tmp, "cache-hand")],
-                                    env=dict(os.environ, OMEGA_USER="farm", OMEGA_TOKEN_FILE=token),
-                                    stdout=subprocess.DEVNULL, stderr=lf)
+        hand, log = start_worker(addr, "hand", tmp, dict(os.environ, OMEGA_USER="farm", OMEGA_TOKEN_FILE=token))
         try:
             wait_file(log, r"(?s)unit \d+: done.*unit (\d+): samples", 60)
             hand.send_signal(signal.SIGKILL)
@@ -122,22 +99,7 @@ slurm:
             time.sleep(0.5)
         assert not q.stdout.strip(), "Slurm jobs left after the job ended: " + q.stdout
 
-        out = os.path.join(tmp, "out.exr")
-        omega(["fetch", str(job), "-o", out], alice)
-        parts = []
-        for i in range(UNITS):
-            p = os.path.join(tmp, f"part{i}.exr")
-            omega(["render", scene, "--samples", f"{i * UNIT}:{(i + 1) * UNIT}", "-o", p, "-q", "--threads", "2"],
-                  alice)
-            parts.append(p)
-        merged = os.path.join(tmp, "merged.exr")
-        omega(["merge"] + parts + ["-o", merged, "-q"], alice)
-        r = subprocess.run([EXR_COMPARE, merged, out], capture_output=True, text=True)
-        assert r.returncode == 0, "result differs from omega merge of the same units: " + r.stdout + r.stderr
-        local = os.path.join(tmp, "local.exr")
-        omega(["render", scene, "--spp", str(SPP), "-o", local, "-q", "--threads", "2"], alice)
-        r = subprocess.run([EXR_COMPARE, "--rel-tol", "1e-6", local, out], capture_output=True, text=True)
-        assert r.returncode == 0, "result differs from omega render --spp beyond 1e-6: " + r.stdout + r.stderr
+        check_units_merge(tmp, scene, job, alice, UNIT, UNITS)
 
 
 if __name__ == "__main__":
