@@ -177,33 +177,7 @@ TEST(IntegratorAgreement, DirectionalOrthographic) {
 // caustic directly but not the sphere (seen through glass, a path ends in S E, which light
 // tracing cannot sample).
 TEST(IntegratorAgreement, GlassCausticSeenDirectly) {
-    SceneDesc d = test::empty_scene(24, 24);
-    d.integrator.max_depth = 6;
-    d.sensor.to_world = Mat4::look_at({-1.3, 2.2, -1.3}, {-1.1, 0, 0}, {0, 1, 0});
-    d.sensor.fov = 28;
-    d.materials["white"] = test::diffuse("white", Rgb(0.8f));
-    DielectricBsdf glass;
-    glass.eta = 1.5f;
-    d.materials["glass"] = MaterialDesc{"glass", glass, {}};
-    d.materials["black"] = MaterialDesc{"black", BlackBsdf{}, {}};
-    ShapeDesc floor;
-    floor.type = ShapeType::Rectangle;
-    floor.to_world = Mat4::rotate({1, 0, 0}, -90) * Mat4::scale({3, 3, 1});
-    floor.material = "white";
-    d.shapes.push_back(floor);
-    ShapeDesc ball;
-    ball.type = ShapeType::Sphere;
-    ball.center = {0, 0.6, 0};
-    ball.radius = 0.5;
-    ball.material = "glass";
-    d.shapes.push_back(ball);
-    ShapeDesc lamp;
-    lamp.type = ShapeType::Sphere;
-    lamp.center = {2.0, 2.0, 0};
-    lamp.radius = 0.15;
-    lamp.material = "black";
-    lamp.emitter = EmitterDesc{Rgb(40.f), false};
-    d.shapes.push_back(lamp);
+    SceneDesc d = test::glass_caustic_scene(0.15, 40.f);
     expect_agreement(d, 2048, 512, 512, 4, "caustic");
 }
 

@@ -124,36 +124,9 @@ TEST(LpeAov, BeautyUnchangedAndDeterministic) {
     }
 }
 
-// A glass ball focusing a spherical light onto a diffuse floor, seen from above without the
-// ball (a path ending S E cannot be light traced): caustics, direct and indirect light.
+// The glass caustic scene (test::glass_caustic_scene) with a caustic, direct and bounded AOV.
 SceneDesc caustic_scene() {
-    SceneDesc d = test::empty_scene(24, 24);
-    d.integrator.max_depth = 6;
-    d.sensor.to_world = Mat4::look_at({-1.3, 2.2, -1.3}, {-1.1, 0, 0}, {0, 1, 0});
-    d.sensor.fov = 28;
-    d.materials["white"] = test::diffuse("white", Rgb(0.8f));
-    DielectricBsdf glass;
-    glass.eta = 1.5f;
-    d.materials["glass"] = MaterialDesc{"glass", glass, {}};
-    d.materials["black"] = MaterialDesc{"black", BlackBsdf{}, {}};
-    ShapeDesc floor;
-    floor.type = ShapeType::Rectangle;
-    floor.to_world = Mat4::rotate({1, 0, 0}, -90) * Mat4::scale({3, 3, 1});
-    floor.material = "white";
-    d.shapes.push_back(floor);
-    ShapeDesc ball;
-    ball.type = ShapeType::Sphere;
-    ball.center = {0, 0.6, 0};
-    ball.radius = 0.5;
-    ball.material = "glass";
-    d.shapes.push_back(ball);
-    ShapeDesc lamp;
-    lamp.type = ShapeType::Sphere;
-    lamp.center = {2.0, 2.0, 0};
-    lamp.radius = 0.4;
-    lamp.material = "black";
-    lamp.emitter = EmitterDesc{Rgb(8.f), false};
-    d.shapes.push_back(lamp);
+    SceneDesc d = test::glass_caustic_scene(0.4, 8.f);
     d.sensor.film.aovs = {{"caustic", "L S+ D E"}, {"direct", "L D E"}, {"bounded", "L .{1,2} E"}};
     return d;
 }

@@ -19,6 +19,37 @@ RenderResult render(const SceneDesc& desc, long long spp, uint64_t seed, int thr
     return r;
 }
 
+SceneDesc glass_caustic_scene(double lamp_radius, float lamp_radiance) {
+    SceneDesc d = empty_scene(24, 24);
+    d.integrator.max_depth = 6;
+    d.sensor.to_world = Mat4::look_at({-1.3, 2.2, -1.3}, {-1.1, 0, 0}, {0, 1, 0});
+    d.sensor.fov = 28;
+    d.materials["white"] = diffuse("white", Rgb(0.8f));
+    DielectricBsdf glass;
+    glass.eta = 1.5f;
+    d.materials["glass"] = MaterialDesc{"glass", glass, {}};
+    d.materials["black"] = MaterialDesc{"black", BlackBsdf{}, {}};
+    ShapeDesc floor;
+    floor.type = ShapeType::Rectangle;
+    floor.to_world = Mat4::rotate({1, 0, 0}, -90) * Mat4::scale({3, 3, 1});
+    floor.material = "white";
+    d.shapes.push_back(floor);
+    ShapeDesc ball;
+    ball.type = ShapeType::Sphere;
+    ball.center = {0, 0.6, 0};
+    ball.radius = 0.5;
+    ball.material = "glass";
+    d.shapes.push_back(ball);
+    ShapeDesc lamp;
+    lamp.type = ShapeType::Sphere;
+    lamp.center = {2.0, 2.0, 0};
+    lamp.radius = lamp_radius;
+    lamp.material = "black";
+    lamp.emitter = EmitterDesc{Rgb(lamp_radiance), false};
+    d.shapes.push_back(lamp);
+    return d;
+}
+
 SceneDesc metal_cube_scene(int w, int h) {
     SceneDesc d = empty_scene(w, h);
     d.sensor.to_world = Mat4::look_at({0, 1, -4}, {0, 0.5, 0}, {0, 1, 0});

@@ -27,6 +27,10 @@ MaterialDesc diffuse(const std::string& name, Rgb reflectance);
 // A rough metal cube on a diffuse floor lit by a small spherical emitter, seen from above: every
 // integrator reaches it, with glossy and diffuse paths (determinism and merge tests).
 SceneDesc metal_cube_scene(int w, int h);
+// A glass ball focusing a spherical light (radius lamp_radius, radiance lamp_radiance) onto a
+// diffuse floor, seen from above without the ball (a path ending S E cannot be light traced):
+// caustics, direct and indirect light. 24 x 24, max_depth 6.
+SceneDesc glass_caustic_scene(double lamp_radius, float lamp_radiance);
 
 struct ZStats {
     double z = 0;        // aggregate z of the mean difference
