@@ -78,16 +78,20 @@ slurm:
             if hand.poll() is None:
                 hand.kill()
         d.wait_log(rf"job {job}: unit \d+ \(samples \d+:\d+\) back to the queue: conn \d+ \(hand\) left", 30)
-        # Slurm ends one array task (as a node failure or a preemption would): omegad starts another.
-        m = d.wait_log(rf"job {job}: unit \d+ \(samples \d+:\d+\) to conn \d+ \((slurm-{slurm_id}_\d)\)", 60)
-        task = m.group(1)[len("slurm-"):]
-        subprocess.run(["scancel", task], env=cluster.env(), check=True, timeout=30)
-        d.wait_log(rf"job {job}: 1 of its Slurm workers ended with work left; starting 1 more", 30)
-        m = d.wait_log(rf"job {job}: Slurm job (\d+): 1 worker\(s\) submitted", 30)
-        assert m.group(1) != slurm_id
+        # Slurm ends the array's tasks (as a node failure or a preemption would): omegad starts
+        # others. Both tasks, not one: with one left alive it could finish every unit before
+        # omegad's next squeue poll (poll_s 1) saw the other gone, and no replacement would be
+        # needed (a race the ASan run lost once). With none alive the job can only finish on
+        # replacements; squeue may report the two ended in one poll or in two.
+        d.wait_log(rf"job {job}: unit \d+ \(samples \d+:\d+\) to conn \d+ \((slurm-{slurm_id}_\d)\)", 60)
+        subprocess.run(["scancel", slurm_id], env=cluster.env(), check=True, timeout=30)
+        d.wait_log(rf"job {job}: [12] of its Slurm workers ended with work left; starting [12] more", 30)
+        m = d.wait_log(rf"job {job}: Slurm job (?!{slurm_id}:)(\d+): [12] worker\(s\) submitted", 30)
         d.wait_log(rf"job {job}: done on workers: {SPP} spp", 120)
-        slurm_workers = set(re.findall(rf"job {job}: unit \d+ \(samples \d+:\d+\) done by conn \d+ \((slurm-{slurm_id}_\d)\)",
+        slurm_workers = set(re.findall(rf"job {job}: unit \d+ \(samples \d+:\d+\) done by conn \d+ \((slurm-\d+_\d)\)",
                                        d.log()))
+        assert any(not w.startswith(f"slurm-{slurm_id}_") for w in slurm_workers), \
+            "no unit was rendered by a replacement Slurm worker:\n" + d.log()[-3000:]
         assert slurm_workers, "no unit was rendered by a Slurm worker:\n" + d.log()[-3000:]
         print(f"units rendered by Slurm workers {sorted(slurm_workers)} and by hand", flush=True)
         d.wait_log(rf"job {job}: scancel [0-9 ]*{m.group(1)}[0-9 ]* \(job done\)", 10)
