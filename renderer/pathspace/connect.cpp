@@ -143,9 +143,9 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
     if (!fp.light_hittable) fp.p_sensor[0] = 0;
     fp.connector.clear();
     if (mirrors) {
-        std::vector<const PathVertex*> vs(static_cast<size_t>(n));
-        for (int i = 0; i < n; ++i) vs[size_t(i)] = &V(i);
-        mirror_connector_factors(*mirrors, vs, fp);
+        fp.vertices.resize(size_t(n));
+        for (int i = 0; i < n; ++i) fp.vertices[size_t(i)] = &V(i);
+        mirror_connector_factors(*mirrors, fp.vertices, fp);
     }
 }
 

@@ -185,16 +185,14 @@ void mirror_connector_factors(const PlanarMirrors& mirrors, const std::vector<co
 
 namespace {
 
-// The mirror vertex of a connector path, as the camera side's next vertex after `from` (whose
-// density of generating it is pdf_fwd, area measure at the mirror).
-PathVertex mirror_vertex(const Scene& scene, const SurfaceHit& hit, double pdf_fwd) {
+// The mirror vertex of a connector path (its densities are set by the caller).
+PathVertex mirror_vertex(const Scene& scene, const SurfaceHit& hit) {
     PathVertex mv;
     mv.kind = VertexKind::Surface;
     mv.delta = true;
     mv.hit = hit;
     mv.shading = Frame::from_normal(hit.ns);
     mv.bsdf = &scene.materials()[scene.shapes()[hit.shape].material];
-    mv.pdf_fwd = pdf_fwd;
     return mv;
 }
 
@@ -212,7 +210,6 @@ std::optional<Connection> connect_via_mirror(const Scene& scene, int mi, const s
     const PathVertex* sampled_sensor = nullptr;
     SurfaceHit mhit;
     Rgb R;
-    double m_pdf_fwd = 0;  // the camera side's density of the mirror vertex (area)
     if (t == 1) {
         // The lens sampled from the image of y = light[s-1]; the splat lands where the camera
         // sees the mirror point.
@@ -255,8 +252,6 @@ std::optional<Connection> connect_via_mirror(const Scene& scene, int mi, const s
         sampled = sensor_vertex(scene, sc->p);
         sampled.pdf_fwd = sensor.delta_direction() ? 1.0 : sensor.pdf_we(sc->p, -sc->wi).pos;
         sampled_sensor = &sampled;
-        PathVertex mv = mirror_vertex(scene, mhit, 0);
-        m_pdf_fwd = sensor_density_at(scene, sampled, mv);
     } else if (s == 1) {
         // Next-event estimation from z = camera[t-1] through the mirror.
         const PathVertex& z = camera[size_t(t - 1)];
@@ -270,8 +265,6 @@ std::optional<Connection> connect_via_mirror(const Scene& scene, int mi, const s
         mhit = ls->mirror;
         sampled = ls->light_vertex;
         sampled_light = &sampled;
-        PathVertex mv = mirror_vertex(scene, mhit, 0);
-        m_pdf_fwd = to_area_density(z, vertex_pdf_sa(z, z.wo, direction(z, mv)), mv);
     } else {
         // Both ends given: the reflection point lies where y meets z's image.
         const PathVertex& y = light[size_t(s - 1)];
@@ -294,8 +287,6 @@ std::optional<Connection> connect_via_mirror(const Scene& scene, int mi, const s
         c.L *= b->weight;
         ++stats.rays;
         if (scene.occluded(spawn_ray_to(mhit, z.p(), z.hit.p_error, z.hit.ng))) return std::nullopt;
-        PathVertex mv = mirror_vertex(scene, mhit, 0);
-        m_pdf_fwd = to_area_density(z, vertex_pdf_sa(z, z.wo, direction(z, mv)), mv);
     }
     if (is_black(c.L)) return std::nullopt;
 
@@ -307,8 +298,13 @@ std::optional<Connection> connect_via_mirror(const Scene& scene, int mi, const s
     } else {
         cam.assign(camera.begin(), camera.begin() + t);
     }
-    cam.push_back(mirror_vertex(scene, mhit, m_pdf_fwd));
-    cam.back().wo = direction(cam.back(), t == 1 ? sampled : camera[size_t(t - 1)]);
+    // The mirror vertex, with the camera side's density of generating it (area measure): the
+    // lens sampled afresh (t = 1), or camera[t-1] scattering towards it.
+    PathVertex mv = mirror_vertex(scene, mhit);
+    const PathVertex& next = t == 1 ? sampled : camera[size_t(t - 1)];
+    mv.pdf_fwd = t == 1 ? sensor_density_at(scene, next, mv) : to_area_density(next, vertex_pdf_sa(next, next.wo, direction(next, mv)), mv);
+    mv.wo = direction(mv, next);
+    cam.push_back(mv);
     FullPathPdfs& fp = cstats.table;
     full_path_pdfs_into(scene, light, cam, s, t + 1, sampled_light, sampled_sensor, fp, set.mirrors);
     // camera[t-2]'s density from the light side: generated at z = camera[t-1] having arrived

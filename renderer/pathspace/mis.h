@@ -17,6 +17,7 @@
 namespace omega {
 
 struct PlanarMirrors;  // pathspace/mirror_connector.h
+struct PathVertex;     // pathspace/vertex.h
 
 struct FullPathPdfs {
     std::vector<double> p_light, p_sensor;
@@ -27,6 +28,7 @@ struct FullPathPdfs {
     // of the others (mirror_connector_factors). 0 elsewhere; empty when the path has no such
     // vertex (the common case costs nothing).
     std::vector<double> connector;
+    std::vector<const PathVertex*> vertices;  // scratch for full_path_pdfs_into: no allocation per connection
     bool light_hittable = true;  // s = 0: the light can be hit by a sensor subpath (not delta in position or direction)
     bool light_at_infinity = false;  // v_0 is at infinity: s = 1, t = 1 cannot connect it to the sensor
     bool sensor_hittable = false;    // t = 0: light subpaths can hit the sensor (a lens of finite aperture)
