@@ -202,8 +202,8 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         auto sc = sensor.sample_wi(y.p(), sampler.next_2d());
         if (!sc) return std::nullopt;
         sampled = sensor_vertex(scene, sc->p);
-        Sensor::Pdf pdf = sensor.pdf_we(sc->p, -sc->wi);
-        sampled->pdf_fwd = sensor.delta_direction() ? 1.0 : pdf.pos;
+        if (!set.single_strategy() || full_path || pdfs)  // only the density table reads it
+            sampled->pdf_fwd = sensor.delta_direction() ? 1.0 : sensor.pdf_we(sc->p, -sc->wi).pos;
         sampled_sensor = &*sampled;
         if (y.kind == VertexKind::Light) {
             // s = 1: the light itself seen by the sensor. Emission towards the sensor over the
@@ -262,6 +262,10 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         if (scene.occluded(spawn_ray_to(y.hit, z.p(), z.hit.p_error, z.hit.ng))) return std::nullopt;
     }
     if (is_black(c.L)) return std::nullopt;
+    if (set.single_strategy() && !full_path && !pdfs) {
+        c.weight = 1.0;  // what mis_weight gives: 1 / (1 + nothing)
+        return c;
+    }
 
     FullPathPdfs& fp = cstats.table;
     full_path_pdfs_into(scene, light, camera, s, t, sampled_light, sampled_sensor, fp, set.mirrors);

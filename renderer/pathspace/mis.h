@@ -52,6 +52,9 @@ struct StrategySet {
         }
         return false;
     }
+    // Only one strategy can make each path (the light tracer's t = 1, no connector), so every
+    // weight is exactly 1 (the MIS sum holds that strategy alone) and no density table is needed.
+    bool single_strategy() const { return type == IntegratorType::Light && !mirrors; }
     bool allows(int s, int t) const {
         switch (type) {
             case IntegratorType::Path: return s <= 1;
