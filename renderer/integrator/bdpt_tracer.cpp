@@ -28,6 +28,7 @@ BdptTracer::BdptTracer(const Scene& scene, const IntegratorDesc& desc)
             set_.lens_hittable = scene.sensor().lens_hittable();
         }
     }
+    light_limits_.densities = !set_.single_strategy();
 }
 
 Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, BdptScratch& scratch, std::vector<Splat>& splats,

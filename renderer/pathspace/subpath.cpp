@@ -90,8 +90,10 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
                 v.dir = -normalize(ray.d);
                 v.light = env;
                 v.beta = beta;
-                v.pdf_fwd = density_towards(scene, path, v);
-                if (n >= 2) path[n - 2].pdf_rev = density_back(scene, path, v);
+                if (lim.densities) {
+                    v.pdf_fwd = density_towards(scene, path, v);
+                    if (n >= 2) path[n - 2].pdf_rev = density_back(scene, path, v);
+                }
                 path.push_back(v);
             }
             break;
@@ -108,8 +110,10 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
         v.beta = beta;
         // Densities from the vertex positions, exactly as a connection would compute them, so
         // every split of a path sees the same numbers.
-        v.pdf_fwd = density_towards(scene, path, v);
-        if (n >= 2) path[n - 2].pdf_rev = density_back(scene, path, v);
+        if (lim.densities) {
+            v.pdf_fwd = density_towards(scene, path, v);
+            if (n >= 2) path[n - 2].pdf_rev = density_back(scene, path, v);
+        }
         path.push_back(v);
         if (int(path.size()) >= lim.max_vertices) break;
         PathVertex& cur = path.back();

@@ -12,6 +12,9 @@ namespace omega {
 struct WalkLimits {
     int max_vertices = 8;  // including the endpoint
     int rr_depth = 5;      // vertex count after which Russian roulette may end the walk
+    // false: the walk leaves pdf_fwd and pdf_rev 0. For walks no MIS weight reads (the light
+    // tracer's, when each path has one strategy), the two densities per vertex were 10% of it.
+    bool densities = true;
 };
 
 // path[0] is the sensor vertex for `ray` (a camera ray from Sensor::generate_ray, whose
