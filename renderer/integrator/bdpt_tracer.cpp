@@ -3,6 +3,7 @@
 #include <bit>
 
 #include "pathspace/mirror_connector.h"
+#include "pathspace/path_signature.h"
 
 namespace omega {
 
@@ -45,6 +46,10 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
         for (size_t a = 0; a < aovs_->size(); ++a) scratch.aov_camera[a] = Rgb(0.f);
         scratch.lpe.prepare(*aovs_, lit, n_light, cam, n_cam);
     }
+    if (breakdown_length_ > 0) {
+        scratch.class_camera.clear();
+        scratch.splat_classes.clear();
+    }
     if (use_t0_) {
         for (const LensCrossing& lc : scratch.lens) {
             if (max_depth_ >= 0 && lc.s > max_depth_) continue;  // k = s edges
@@ -55,6 +60,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             if (per_strategy) per_strategy->push_back({lc.s + 1, 0, unweighted, weighted, true, c->film});
             const uint32_t mask = aovs_ ? scratch.lpe.match_lens(lc.s) : 0;
             splats.push_back({c->film, weighted, mask});
+            if (breakdown_length_ > 0) record_class(scratch, lc.s, 0, false, true, weighted);
         }
     }
     // t = 1 needs no camera subpath; s = 1 samples its light vertex afresh (next-event estimation).
@@ -80,6 +86,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             // The full path as this strategy built it, connection included, matched before its
             // MIS-weighted value goes anywhere.
             const uint32_t mask = aovs_ ? scratch.lpe.match(s, t) : 0;
+            if (breakdown_length_ > 0) record_class(scratch, s, t, false, c->splat, weighted);
             if (c->splat) {
                 splats.push_back({c->film, weighted, mask});
             } else {
@@ -102,6 +109,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
                     Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
                     Rgb weighted = unweighted * float(c->weight);
                     const uint32_t mask = aovs_ ? scratch.lpe.match(s, t, true) : 0;
+                    if (breakdown_length_ > 0) record_class(scratch, s, t, true, c->splat, weighted);
                     if (c->splat) {
                         splats.push_back({c->film, weighted, mask});
                     } else {
@@ -112,6 +120,15 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             }
     }
     return L;
+}
+
+void BdptTracer::record_class(BdptScratch& scratch, int s, int t, bool via_mirror, bool splat, const Rgb& weighted) const {
+    if (t == 0) lens_signature(scratch.light, s, scratch.signature);
+    else strategy_signature(scratch.light, scratch.camera, s, t, scratch.signature);
+    // The connector's mirror stands between the light side's s vertices and the camera side.
+    const PathClassKey key = path_class_key(scratch.signature, breakdown_length_, via_mirror ? s - 1 : -1);
+    if (splat) scratch.splat_classes.push_back(key);
+    else if (!is_black(weighted)) scratch.class_camera.emplace_back(key, weighted);
 }
 
 }  // namespace omega
