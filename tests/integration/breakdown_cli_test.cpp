@@ -1,0 +1,124 @@
+// `omega render --breakdown` as a user runs it: the table, NAME.breakdown.csv, the chart
+// NAME.breakdown.png and the EXR header attribute omega.breakdown; a pixel box; bad boxes.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "film/film.h"
+#include "integrator/breakdown.h"
+#include "run_omega.h"
+
+namespace fs = std::filesystem;
+
+namespace omega {
+namespace {
+
+// A diffuse sphere beside a mirror, lit by a point light: D and S classes of several lengths.
+const char* kScene = R"(omega: 1
+integrator: {type: path, max_depth: 4}
+sensor:
+  type: perspective
+  fov: 50
+  to_world: {look_at: {origin: [0, 0, -3], target: [0, 0, 0], up: [0, 1, 0]}}
+  film: {width: 16, height: 12}
+materials:
+  white: {type: diffuse, reflectance: [0.5, 0.5, 0.5]}
+  mirror: {type: conductor}
+shapes:
+  - {type: sphere, center: [0, 0, 0], radius: 0.7, material: white}
+  - {type: rectangle, to_world: [{scale: 3}, {translate: [0, 0, 1.5]}], material: mirror}
+lights:
+  - {type: point, position: [0, 2, -2], intensity: [5, 5, 5]}
+)";
+
+std::string read_file(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+// Width and height from a PNG's IHDR chunk (0 x 0 if the file is no PNG).
+std::pair<uint32_t, uint32_t> png_size(const std::string& bytes) {
+    if (bytes.size() < 24 || bytes.compare(1, 3, "PNG") != 0 || bytes.compare(12, 4, "IHDR") != 0) return {0, 0};
+    auto be32 = [&](size_t at) {
+        uint32_t v = 0;
+        for (size_t i = 0; i < 4; ++i) v = (v << 8) | uint8_t(bytes[at + i]);
+        return v;
+    };
+    return {be32(16), be32(20)};
+}
+
+class BreakdownCli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() / fs::path("omega_breakdown_cli_" + std::to_string(::getpid()) + "_" +
+                                                    ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(dir_);
+        scene_ = (dir_ / "scene.yaml").string();
+        std::ofstream(scene_) << kScene;
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+    fs::path dir_;
+    std::string scene_;
+};
+
+TEST_F(BreakdownCli, WritesTableCsvChartAndHeader) {
+    for (const char* integrator : {"path", "bdpt"}) {
+        const std::string out = path(std::string(integrator) + ".exr");
+        auto r = test::run_omega("render " + scene_ + " -o " + out + " --spp 4 --threads 2 -q --breakdown --integrator " +
+                                 integrator);
+        ASSERT_EQ(r.code, 0) << r.output;
+        EXPECT_NE(r.output.find("L D E"), std::string::npos) << r.output;  // the table
+        const std::string csv = read_file(path(std::string(integrator) + ".breakdown.csv"));
+        const BreakdownReport rep = parse_breakdown_csv(csv);
+        EXPECT_EQ(rep.region, "image");
+        EXPECT_FALSE(rep.of_kind("class").empty());
+        EXPECT_EQ(rep.of_kind("total").size(), 1u);
+        // The header carries the same report.
+        const ExrImage img = read_exr(out);
+        auto it = img.attributes.find("omega.breakdown");
+        ASSERT_NE(it, img.attributes.end());
+        EXPECT_EQ(it->second, csv);
+        // The chart is a PNG with room for its bars and legend.
+        const auto [w, h] = png_size(read_file(path(std::string(integrator) + ".breakdown.png")));
+        EXPECT_GE(w, 200u);
+        EXPECT_GE(h, 200u);
+    }
+}
+
+TEST_F(BreakdownCli, BoxAndCsvPath) {
+    const std::string csv = path("box.csv");
+    auto r = test::run_omega("render " + scene_ + " -o " + path("b.exr") +
+                             " --spp 2 -q --breakdown --breakdown-box 4,3,12,9 --breakdown-length 1 --breakdown-csv " + csv);
+    ASSERT_EQ(r.code, 0) << r.output;
+    const BreakdownReport rep = parse_breakdown_csv(read_file(csv));
+    EXPECT_EQ(rep.region, "box:4:3:12:9");
+    bool longer = false;
+    for (const auto& row : rep.rows) {
+        EXPECT_LE(row.length, kMaxBreakdownLength + 1);
+        if (row.kind == "class" && row.length <= kMaxBreakdownLength) {
+            EXPECT_LE(row.length, 1) << row.name;
+        }
+        longer = longer || row.name == "longer";
+    }
+    EXPECT_TRUE(longer) << "the direct light (2 edges) goes in the longer row";
+}
+
+TEST_F(BreakdownCli, BadBoxExitsTwo) {
+    for (const char* box : {"0,0,17,5", "5,5,5,8", "1,2,3", "a,b,c,d"}) {
+        auto r = test::run_omega("render " + scene_ + " -o " + path("x.exr") + " --spp 1 -q --breakdown-box " + box);
+        EXPECT_EQ(r.code, 2) << box << ": " << r.output;
+        EXPECT_NE(r.output.find("breakdown box"), std::string::npos) << r.output;
+        EXPECT_FALSE(fs::exists(path("x.exr")));
+    }
+}
+
+}  // namespace
+}  // namespace omega
