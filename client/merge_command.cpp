@@ -25,6 +25,15 @@ int run_merge(const MergeArgs& a) {
         fmt::print(stderr, "omega merge: {}\n", e.what());
         return 2;
     }
+    // A part's breakdown (omega render --breakdown) holds its own sample range's statistics as
+    // rounded text, which cannot be combined exactly: the merged image carries none, and says so.
+    bool breakdown = false;
+    for (const PartialRender& p : parts) breakdown = breakdown || p.meta.attributes.count("omega.breakdown") > 0;
+    if (breakdown)
+        fmt::print(stderr,
+                   "omega merge: warning: the parts' path-class breakdowns (omega.breakdown) are not merged; {} carries "
+                   "none (render the whole range with --breakdown for one)\n",
+                   a.output);
     std::optional<MergeResult> merged;
     try {
         merged.emplace(merge_parts(std::move(parts), a.allow_gaps));

@@ -120,5 +120,18 @@ TEST_F(BreakdownCli, BadBoxExitsTwo) {
     }
 }
 
+// Parts of a render each carry their own range's breakdown; merge cannot combine them exactly,
+// so it drops them with a warning rather than passing one part's off as the whole's.
+TEST_F(BreakdownCli, MergeDropsPartBreakdownsWithAWarning) {
+    const std::string common = " -q --breakdown --threads 2";
+    ASSERT_EQ(test::run_omega("render " + scene_ + " --samples 0:2 -o " + path("p0.exr") + common).code, 0);
+    ASSERT_EQ(test::run_omega("render " + scene_ + " --samples 2:4 -o " + path("p1.exr") + common).code, 0);
+    EXPECT_TRUE(read_exr(path("p0.exr")).attributes.count("omega.breakdown"));
+    auto m = test::run_omega("merge " + path("p0.exr") + " " + path("p1.exr") + " -o " + path("m.exr"));
+    ASSERT_EQ(m.code, 0) << m.output;
+    EXPECT_NE(m.output.find("breakdowns (omega.breakdown) are not merged"), std::string::npos) << m.output;
+    EXPECT_FALSE(read_exr(path("m.exr")).attributes.count("omega.breakdown"));
+}
+
 }  // namespace
 }  // namespace omega
