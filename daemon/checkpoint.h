@@ -25,6 +25,10 @@ struct FilmSnapshot {
   // In memory only (not in the checkpoint file): what tile EXRs report in their omega.* header.
   std::string integrator;  // "path", "light" or "bdpt"; empty until known
   std::uint64_t seed = 0;
+  // The path-class breakdown (film key `breakdown`) as breakdown_csv text, and the samples it
+  // covers ("A:B"): a resumed job's covers only what it rendered since the resume, since the
+  // breakdown's sums are not checkpointed. Empty without a breakdown.
+  std::string breakdown, breakdown_samples;
 };
 
 // Any thread. Writes PATH.tmp, fsyncs it, renames it over PATH and fsyncs the directory.

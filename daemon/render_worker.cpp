@@ -8,6 +8,8 @@
 #include <chrono>
 #include <cmath>
 
+#include <fmt/format.h>
+
 #include "integrator/render_session.h"
 #include "pathspace/classify.h"
 #include "pathspace/lpe_classify.h"
@@ -29,6 +31,14 @@ const char* to_string(StopKind k) {
 }
 
 namespace {
+
+// omega.breakdown and omega.breakdown_samples, when the job has a breakdown: whole images only
+// (fetch, result), not every tile.
+void add_breakdown_attributes(const FilmSnapshot& s, ExrMeta& m) {
+  if (s.breakdown.empty()) return;
+  m.attributes["omega.breakdown"] = s.breakdown;
+  m.attributes["omega.breakdown_samples"] = s.breakdown_samples;
+}
 
 ExrMeta meta_of(const FilmSnapshot& s) {
   ExrMeta m;
@@ -70,6 +80,7 @@ std::vector<EncodedTile> encode_tiles(const Film& film, int tile_size, const Fil
 std::string encode_image(const Film& film, const FilmSnapshot& meta, const std::vector<AovFilm>& aovs) {
   ExrMeta m = meta_of(meta);
   append_aov_layers(aovs, m);
+  add_breakdown_attributes(meta, m);
   auto bytes = encode_exr_tile(film, film.crop(), m);
   return std::string(bytes.begin(), bytes.end());
 }
@@ -252,6 +263,10 @@ void RenderWorker::run() {
       for (const AovFilm& a : aov_films) snap->aov_films.push_back(a.film.serialize());
       snap->integrator = integrator_name(desc.integrator.type);
       snap->seed = spec_.seed;
+      if (const BreakdownCollector* bc = session.breakdown()) {
+        snap->breakdown = breakdown_csv(bc->report());
+        snap->breakdown_samples = fmt::format("{}:{}", rs.first_sample, r.spp);
+      }
       last = snap;
       last_on_disk = false;
       const bool draining = stop_requested() == StopKind::drain;
@@ -304,6 +319,7 @@ void RenderWorker::run() {
       m.warnings = desc.warnings;
       m.rel_error = meta.rel_error.value_or(0);
       append_aov_layers(aov_films, m);
+      add_breakdown_attributes(meta, m);
       write_exr(spec_.paths.result(), session.film(), m);
       result.outcome = WorkerResult::Outcome::done;
     } else {

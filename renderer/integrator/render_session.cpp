@@ -46,7 +46,15 @@ RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
     const FilmDesc& fd = scene.desc().sensor.film;
     if (!fd.aovs.empty()) aovs_ = std::make_unique<AovImages>(fd, fd.aovs);
     const bool splatting = settings.integrator.type != IntegratorType::Path;
-    if (settings.breakdown) breakdown_ = std::make_unique<BreakdownCollector>(*settings.breakdown, film_.crop(), splatting);
+    // The settings' breakdown (omega render --breakdown), else the film's (the scene key, which
+    // is how a daemon job asks for one).
+    if (!settings_.breakdown && fd.breakdown) {
+        BreakdownDesc bd;
+        bd.max_length = fd.breakdown->length;
+        if (const auto& b = fd.breakdown->box) bd.box = Rect{(*b)[0], (*b)[1], (*b)[2], (*b)[3]};
+        settings_.breakdown = bd;
+    }
+    if (settings_.breakdown) breakdown_ = std::make_unique<BreakdownCollector>(*settings_.breakdown, film_.crop(), splatting);
     if (splatting) {
         bdpt_ = std::make_unique<BdptTracer>(scene, settings.integrator);
         if (aovs_) bdpt_->set_aovs(&aovs_->lpes());

@@ -83,6 +83,27 @@ def test_aovs_in_tiles_and_fetch(tmp, daemons):
     c.close()
 
 
+def test_breakdown_in_fetch_and_result(tmp, daemons):
+    """A scene whose film asks for the path-class breakdown (film key `breakdown`, the job
+    option): the fetched image's omega.breakdown header equals a local render's, text for text
+    (its sums are exact, so the daemon's threads and passes cannot change a digit)."""
+    scene = small_cornell().replace(b"film: {width: 80", b"film: {breakdown: {length: 4}, width: 80")
+    assert b"breakdown:" in scene
+    local = os.path.join(tmp, "local-breakdown.exr")
+    local_render(scene, local, SPP, SEED, tmp)
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    c = d.client()
+    a = c.submit(scene, name="cornell-breakdown", seed=SEED, halt_=op.halt(spp=SPP))
+    assert a["type"] == "accepted", a
+    wait_state(c, a["job"], {"done"})
+    fetched = c.job("fetch", a["job"])
+    p = os.path.join(tmp, "breakdown-fetched.exr")
+    write(p, fetched["_payload"])
+    assert exr_equal(local, p, attrs=("omega.breakdown",)), "fetched breakdown differs from the local render's"
+    c.close()
+
+
 def test_mesh_asset_cached_and_late_subscriber(tmp, daemons):
     scene = small_cornell().replace(
         b"shapes:\n", b"shapes:\n  - {type: mesh, file: meshes/tri.obj, material: FloorBSDF}\n", 1)
@@ -167,5 +188,6 @@ if __name__ == "__main__":
     t.run(test_tiles_stream_before_their_pass_ends)
     t.run(test_stream_and_fetch_equal_local_render)
     t.run(test_aovs_in_tiles_and_fetch)
+    t.run(test_breakdown_in_fetch_and_result)
     t.run(test_mesh_asset_cached_and_late_subscriber)
     t.exit()
