@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -131,6 +132,25 @@ TEST_F(BreakdownCli, MergeDropsPartBreakdownsWithAWarning) {
     ASSERT_EQ(m.code, 0) << m.output;
     EXPECT_NE(m.output.find("breakdowns (omega.breakdown) are not merged"), std::string::npos) << m.output;
     EXPECT_FALSE(read_exr(path("m.exr")).attributes.count("omega.breakdown"));
+}
+
+// converge --breakdown: per-class columns per checkpoint, and the line naming the class that
+// holds the largest share of the error.
+TEST_F(BreakdownCli, ConvergeWritesPerClassColumns) {
+    const std::string out = path("conv");
+    auto r = test::run_omega("converge " + scene_ + " --no-reference --budget 1 --runs 1 --integrators path --threads 2 "
+                             "--breakdown --breakdown-classes 2 --out-dir " + out);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("of the energy and"), std::string::npos) << r.output;
+    std::istringstream wide(read_file(out + "/path_classes_mean.csv"));
+    std::string header, row;
+    ASSERT_TRUE(std::getline(wide, header));
+    EXPECT_EQ(header.rfind("time_target_s,time_s,all,L D E", 0), 0u) << header;  // L D E carries the most here
+    ASSERT_TRUE(std::getline(wide, row));
+    EXPECT_EQ(std::count(row.begin(), row.end(), ','), std::count(header.begin(), header.end(), ',')) << row;
+    const std::string lines = read_file(out + "/path_classes.csv");
+    EXPECT_EQ(lines.rfind("run,seed,time_target_s,time_s,spp,class,energy_fraction,relvar,error_fraction\n", 0), 0u);
+    EXPECT_NE(lines.find(",L D E,"), std::string::npos) << lines;
 }
 
 }  // namespace
