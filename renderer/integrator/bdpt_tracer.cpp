@@ -3,7 +3,6 @@
 #include <bit>
 
 #include "pathspace/mirror_connector.h"
-#include "pathspace/path_signature.h"
 
 namespace omega {
 
@@ -49,6 +48,15 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
     if (breakdown_length_ > 0) {
         scratch.class_camera.clear();
         scratch.splat_classes.clear();
+        // Longer paths are one class: vertices past the breakdown's length never matter.
+        auto delta_bits = [&](const std::vector<PathVertex>& v, int n) {
+            uint64_t bits = 0;
+            for (int i = 1; i < std::min(n, kMaxBreakdownLength + 2); ++i)
+                if (v[size_t(i)].delta) bits |= uint64_t(1) << (i - 1);
+            return bits;
+        };
+        scratch.light_delta = delta_bits(lit, n_light);
+        scratch.camera_delta = delta_bits(cam, n_cam);
     }
     if (use_t0_) {
         for (const LensCrossing& lc : scratch.lens) {
@@ -123,10 +131,9 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
 }
 
 void BdptTracer::record_class(BdptScratch& scratch, int s, int t, bool via_mirror, bool splat, const Rgb& weighted) const {
-    if (t == 0) lens_signature(scratch.light, s, scratch.signature);
-    else strategy_signature(scratch.light, scratch.camera, s, t, scratch.signature);
-    // The connector's mirror stands between the light side's s vertices and the camera side.
-    const PathClassKey key = path_class_key(scratch.signature, breakdown_length_, via_mirror ? s - 1 : -1);
+    const PathClassKey key = t == 0 ? lens_class_key(scratch.light_delta, s, breakdown_length_)
+                                    : strategy_class_key(scratch.light_delta, scratch.camera_delta, s, t, via_mirror,
+                                                         breakdown_length_);
     if (splat) scratch.splat_classes.push_back(key);
     else if (!is_black(weighted)) scratch.class_camera.emplace_back(key, weighted);
 }

@@ -35,7 +35,7 @@ struct BdptScratch {
     // and the class of each splat it appended (in the same order); signature is scratch.
     std::vector<std::pair<PathClassKey, Rgb>> class_camera;
     std::vector<PathClassKey> splat_classes;
-    std::vector<VertexClass> signature;
+    uint64_t light_delta = 0, camera_delta = 0;  // bit i - 1: vertex i of the subpath is delta (path_class.h)
 };
 
 struct StrategyContribution {

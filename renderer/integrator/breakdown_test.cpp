@@ -8,6 +8,7 @@
 #include <random>
 
 #include "integrator/path_class.h"
+#include "pathspace/path_signature.h"
 
 namespace omega {
 namespace {
@@ -65,6 +66,36 @@ TEST(PathClass, KeysAndNames) {
     EXPECT_EQ(t.contributions()[0].first, k);
     EXPECT_EQ(path_class_name(t.contributions()[1].first), "L S E");
     EXPECT_EQ(path_class_name(t.contributions()[2].first), "L S D E");
+}
+
+// The BDPT tracer's keys from delta bits equal the keys of the full signatures that
+// strategy_signature and lens_signature build (the light path expressions' classes).
+TEST(PathClass, DeltaBitKeysMatchSignatures) {
+    std::mt19937_64 rng(3);
+    std::vector<VertexClass> sig;
+    for (int trial = 0; trial < 200; ++trial) {
+        std::vector<PathVertex> light(8), camera(8);
+        uint64_t ld = 0, cd = 0;
+        for (int i = 1; i < 8; ++i) {
+            light[size_t(i)].delta = rng() % 2;
+            camera[size_t(i)].delta = rng() % 2;
+            if (light[size_t(i)].delta) ld |= uint64_t(1) << (i - 1);
+            if (camera[size_t(i)].delta) cd |= uint64_t(1) << (i - 1);
+        }
+        for (int s = 0; s <= 7; ++s)
+            for (int t = 1; t <= 7; ++t) {
+                if (s + t - 1 < 1) continue;
+                strategy_signature(light, camera, s, t, sig);
+                EXPECT_EQ(strategy_class_key(ld, cd, s, t, false, 16), path_class_key(sig, 16)) << s << " " << t;
+                if (s >= 1) {
+                    EXPECT_EQ(strategy_class_key(ld, cd, s, t, true, 16), path_class_key(sig, 16, s - 1)) << s << " " << t;
+                }
+            }
+        for (int s = 1; s <= 7; ++s) {
+            lens_signature(light, s, sig);
+            EXPECT_EQ(lens_class_key(ld, s, 16), path_class_key(sig, 16)) << s;
+        }
+    }
 }
 
 TEST(BreakdownStats, FractionAndErrors) {

@@ -11,6 +11,7 @@
 //
 // Concurrency: a plain value; one thread at a time.
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -25,27 +26,23 @@ public:
     static constexpr int kLimbs = (kMaxExp - kMinExp) / kLimbBits + 3;  // + room for carries
 
     void add(double x) {
-        if (x == 0) return;
-        if (!std::isfinite(x)) {
+        // Straight from the bits (frexp and ldexp are library calls): x = M 2^(E - 1075).
+        const uint64_t bits = std::bit_cast<uint64_t>(x);
+        const int biased = int((bits >> 52) & 0x7ff);
+        uint64_t m53 = bits & ((uint64_t(1) << 52) - 1);
+        if (biased == 0x7ff || biased - 1022 >= kMaxExp) {  // inf, nan, or |x| >= 2^kMaxExp
             overflow_ = true;
             return;
         }
-        int e = 0;
-        const double m = std::frexp(x, &e);  // x = m 2^e, 0.5 <= |m| < 1
-        if (e >= kMaxExp) {
-            overflow_ = true;
-            return;
-        }
-        // x = M 2^(e - 53) with M a 53-bit integer.
-        int64_t mant = int64_t(std::ldexp(m, 53));
-        int p = e - 53 - kMinExp;  // bit position of M's lowest bit in the accumulator
+        if (biased != 0) m53 |= uint64_t(1) << 52;
+        if (m53 == 0) return;
+        int p = (biased == 0 ? -1074 : biased - 1075) - kMinExp;  // bit position of M's lowest bit
         if (p < 0) {
             if (p <= -53) return;
-            mant /= int64_t(1) << (-p);  // truncates toward zero: the same whatever the order
+            m53 >>= -p;  // drops the bits below 2^kMinExp: the same whatever the order
             p = 0;
         }
-        const bool neg = mant < 0;
-        const uint64_t m53 = uint64_t(neg ? -mant : mant);
+        const bool neg = bits >> 63;
         const int sh = p % kLimbBits;
         // M 2^sh spans up to 84 bits: three 32-bit digits.
         const uint64_t d[3] = {(m53 << sh) & 0xffffffffu, (m53 >> (kLimbBits - sh)) & 0xffffffffu,

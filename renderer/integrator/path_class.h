@@ -36,6 +36,33 @@ std::string path_class_name(PathClassKey key);
 // signature[mirror_after].
 PathClassKey path_class_key(const std::vector<VertexClass>& signature, int max_length, int mirror_after = -1);
 
+// The same keys from the subpaths' delta flags, without building the signature: bit i - 1 of
+// light_delta is light[i].delta, bit j - 1 of camera_delta is camera[j].delta (vertex 0 is the
+// endpoint in both). The joined vertices of a connection are D, as in strategy_signature; with
+// via_mirror, the connector's mirror (S) stands between the s light and t camera vertices.
+inline PathClassKey strategy_class_key(uint64_t light_delta, uint64_t camera_delta, int s, int t, bool via_mirror,
+                                       int max_length) {
+    const int k = s + t - 1 + (via_mirror ? 1 : 0);
+    if (k > max_length) return kLongerClass;
+    // Camera vertex j is inner vertex j from the eye; the one joined (j = t - 1, s >= 1) is D.
+    uint64_t bits = t >= 2 ? camera_delta & ((uint64_t(1) << (t - 1)) - 1) : 0;
+    if (s >= 1 && t >= 2) bits &= ~(uint64_t(1) << (t - 2));
+    if (via_mirror) bits |= uint64_t(1) << (t - 1);
+    // Light vertex i is inner vertex k - i from the eye; the one joined (i = s - 1, t >= 1) is D.
+    for (int i = 1; i < s; ++i)
+        if (((light_delta >> (i - 1)) & 1) && !(i == s - 1 && t >= 1)) bits |= uint64_t(1) << (k - i - 1);
+    return path_class_key(k, bits, max_length);
+}
+
+// Strategy t = 0: the light walk's first s vertices, all as walked, then the lens (E).
+inline PathClassKey lens_class_key(uint64_t light_delta, int s, int max_length) {
+    if (s > max_length) return kLongerClass;
+    uint64_t bits = 0;
+    for (int i = 1; i < s; ++i)
+        if ((light_delta >> (i - 1)) & 1) bits |= uint64_t(1) << (s - i - 1);
+    return path_class_key(s, bits, max_length);
+}
+
 // The path tracer's classes along one camera walk (eye first), fed at the same places as its
 // CameraLpeTracker, so that a breakdown's classes are the light path expressions' classes.
 // Concurrency: one per render thread; reset() per camera sample.
