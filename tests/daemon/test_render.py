@@ -36,6 +36,19 @@ def check_job(tmp, c, job, local, label):
     return tiles
 
 
+def render_here_and_submit(tmp, daemons, scene, label):
+    """Renders `scene` locally (SPP, SEED) to local-LABEL.exr, starts a daemon and submits the
+    same scene to it. Returns the local path, the client and the `accepted` reply."""
+    local = os.path.join(tmp, f"local-{label}.exr")
+    local_render(scene, local, SPP, SEED, tmp)
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    c = d.client()
+    a = c.submit(scene, name=f"cornell-{label}", seed=SEED, halt_=op.halt(spp=SPP))
+    assert a["type"] == "accepted", a
+    return local, c, a
+
+
 def test_stream_and_fetch_equal_local_render(tmp, daemons):
     scene = small_cornell()
     local = os.path.join(tmp, "local.exr")
@@ -63,13 +76,7 @@ def test_aovs_in_tiles_and_fetch(tmp, daemons):
     scene = small_cornell().replace(b"film: {width: 80", b'film: {aov: {direct: "L D E", indirect: "L D D+ E"}, width: 80')
     assert b"aov:" in scene
     layers = ("aov.direct", "aov.direct.var", "aov.indirect", "aov.indirect.var")
-    local = os.path.join(tmp, "local-aov.exr")
-    local_render(scene, local, SPP, SEED, tmp)
-    d = Daemon(tmp).start()
-    daemons.append(d)
-    c = d.client()
-    a = c.submit(scene, name="cornell-aov", seed=SEED, halt_=op.halt(spp=SPP))
-    assert a["type"] == "accepted", a
+    local, c, a = render_here_and_submit(tmp, daemons, scene, "aov")
     tiles, progress, done = watch(c, a["job"])
     assert done["state"] == "done", done
     for (rect, (h, payload)) in tiles.items():
@@ -89,13 +96,7 @@ def test_breakdown_in_fetch_and_result(tmp, daemons):
     (its sums are exact, so the daemon's threads and passes cannot change a digit)."""
     scene = small_cornell().replace(b"film: {width: 80", b"film: {breakdown: {length: 4}, width: 80")
     assert b"breakdown:" in scene
-    local = os.path.join(tmp, "local-breakdown.exr")
-    local_render(scene, local, SPP, SEED, tmp)
-    d = Daemon(tmp).start()
-    daemons.append(d)
-    c = d.client()
-    a = c.submit(scene, name="cornell-breakdown", seed=SEED, halt_=op.halt(spp=SPP))
-    assert a["type"] == "accepted", a
+    local, c, a = render_here_and_submit(tmp, daemons, scene, "breakdown")
     wait_state(c, a["job"], {"done"})
     fetched = c.job("fetch", a["job"])
     p = os.path.join(tmp, "breakdown-fetched.exr")

@@ -2,8 +2,6 @@
 // NAME.breakdown.png and the EXR header attribute omega.breakdown; a pixel box; bad boxes.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -13,29 +11,12 @@
 #include "film/film.h"
 #include "integrator/breakdown.h"
 #include "run_omega.h"
+#include "scene_dir_fixture.h"
 
 namespace fs = std::filesystem;
 
 namespace omega {
 namespace {
-
-// A diffuse sphere beside a mirror, lit by a point light: D and S classes of several lengths.
-const char* kScene = R"(omega: 1
-integrator: {type: path, max_depth: 4}
-sensor:
-  type: perspective
-  fov: 50
-  to_world: {look_at: {origin: [0, 0, -3], target: [0, 0, 0], up: [0, 1, 0]}}
-  film: {width: 16, height: 12}
-materials:
-  white: {type: diffuse, reflectance: [0.5, 0.5, 0.5]}
-  mirror: {type: conductor}
-shapes:
-  - {type: sphere, center: [0, 0, 0], radius: 0.7, material: white}
-  - {type: rectangle, to_world: [{scale: 3}, {translate: [0, 0, 1.5]}], material: mirror}
-lights:
-  - {type: point, position: [0, 2, -2], intensity: [5, 5, 5]}
-)";
 
 std::string read_file(const std::string& path) {
     std::ifstream f(path, std::ios::binary);
@@ -55,19 +36,9 @@ std::pair<uint32_t, uint32_t> png_size(const std::string& bytes) {
     return {be32(16), be32(20)};
 }
 
-class BreakdownCli : public ::testing::Test {
+class BreakdownCli : public test::SceneDirTest {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() / fs::path("omega_breakdown_cli_" + std::to_string(::getpid()) + "_" +
-                                                    ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir_);
-        scene_ = (dir_ / "scene.yaml").string();
-        std::ofstream(scene_) << kScene;
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-    fs::path dir_;
-    std::string scene_;
+    BreakdownCli() : SceneDirTest("omega_breakdown_cli_", test::kMirrorSphereScene) {}
 };
 
 TEST_F(BreakdownCli, WritesTableCsvChartAndHeader) {
