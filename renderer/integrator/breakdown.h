@@ -92,7 +92,7 @@ struct BreakdownRow {
 };
 
 struct BreakdownReport {
-    std::string region;  // "image" or "box:x0,y0,x1,y1"
+    std::string region;  // "image" or "box:x0:y0:x1:y1" (colons: it is a CSV field)
     int max_length = 6;
     uint64_t units = 0;
     std::vector<BreakdownRow> rows;  // the classes by length then key, the lengths, the total

@@ -36,7 +36,7 @@ public:
                               const Filter& filter);
 
     BreakdownReport report() const;
-    // "image", or "box:x0,y0,x1,y1".
+    // "image", or "box:x0:y0:x1:y1".
     std::string region_name() const;
 
 private:
