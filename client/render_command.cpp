@@ -263,6 +263,10 @@ int run_render(const RenderArgs& a) {
     if (const BreakdownCollector* bc = session->breakdown()) {
         breakdown = bc->report();
         meta.attributes["omega.breakdown"] = breakdown_csv(*breakdown);
+        // A part also carries the exact sums, which `omega merge` adds up exactly.
+        if (range)
+            meta.attributes["omega.breakdown_state"] =
+                breakdown_state_text({bc->region_name(), bc->max_length(), bc->stats()});
     }
     try {
         if (range) {

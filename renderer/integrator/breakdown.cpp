@@ -8,6 +8,44 @@
 
 namespace omega {
 
+std::string ExactSum::text() const {
+    if (overflow_) return "nan";
+    const auto d = digits();
+    int lo = 0, hi = kLimbs - 1;
+    while (lo < kLimbs && d[size_t(lo)] == 0) ++lo;
+    if (lo == kLimbs) return "0";
+    while (d[size_t(hi)] == 0) --hi;
+    std::string s = fmt::format("{}:", lo);
+    for (int i = lo; i <= hi; ++i) s += fmt::format("{}{:x}", i > lo ? "," : "", d[size_t(i)]);
+    return s;
+}
+
+void ExactSum::set_text(std::string_view t) {
+    std::array<int64_t, kLimbs> d{};
+    if (t == "nan") return set_digits(d, true);
+    if (t != "0") {
+        const size_t colon = t.find(':');
+        if (colon == std::string_view::npos) throw std::invalid_argument("exact sum: no ':'");
+        int i = 0;
+        try {
+            i = std::stoi(std::string(t.substr(0, colon)));
+            std::string rest(t.substr(colon + 1));
+            std::istringstream in(rest);
+            for (std::string f; std::getline(in, f, ','); ++i) {
+                if (i < 0 || i >= kLimbs) throw std::invalid_argument("exact sum: limb out of range");
+                size_t used = 0;
+                d[size_t(i)] = std::stoll(f, &used, 16);
+                if (used != f.size()) throw std::invalid_argument("exact sum: bad digit");
+            }
+        } catch (const std::invalid_argument&) {
+            throw;
+        } catch (const std::exception&) {
+            throw std::invalid_argument("exact sum: bad number");
+        }
+    }
+    set_digits(d, false);
+}
+
 std::string path_class_name(PathClassKey key) {
     if (key == kLongerClass) return "longer";
     const int k = path_class_length(key);
@@ -60,6 +98,79 @@ void BreakdownStats::merge(const BreakdownStats& o) {
     for (const auto& [k, m] : o.classes_) classes_[k].add(m);
     for (const auto& [k, m] : o.lengths_) lengths_[k].add(m);
     total_.add(o.total_);
+}
+
+namespace {
+
+std::string moments_text(const BreakdownMoments& m) { return m.x.text() + " " + m.xx.text() + " " + m.xt.text(); }
+
+BreakdownMoments moments_of(std::istringstream& in) {
+    BreakdownMoments m;
+    std::string a, b, c;
+    if (!(in >> a >> b >> c)) throw std::invalid_argument("breakdown state: a truncated line");
+    m.x.set_text(a);
+    m.xx.set_text(b);
+    m.xt.set_text(c);
+    return m;
+}
+
+}  // namespace
+
+std::string BreakdownStats::serialize() const {
+    std::string s = fmt::format("units {}\n", units_);
+    for (const auto& [k, m] : classes_) s += fmt::format("c {:x} {}\n", k, moments_text(m));
+    for (const auto& [k, m] : lengths_) s += fmt::format("l {} {}\n", k, moments_text(m));
+    return s + "t " + moments_text(total_) + "\n";
+}
+
+BreakdownStats BreakdownStats::deserialize(const std::string& text) {
+    BreakdownStats st;
+    std::istringstream lines(text);
+    std::string line;
+    bool total = false;
+    while (std::getline(lines, line)) {
+        std::istringstream in(line);
+        std::string tag;
+        in >> tag;
+        if (tag == "units") {
+            if (!(in >> st.units_)) throw std::invalid_argument("breakdown state: bad unit count");
+        } else if (tag == "c") {
+            std::string key;
+            in >> key;
+            try {
+                st.classes_[std::stoull(key, nullptr, 16)] = moments_of(in);
+            } catch (const std::out_of_range&) {
+                throw std::invalid_argument("breakdown state: bad class key");
+            }
+        } else if (tag == "l") {
+            int k = 0;
+            if (!(in >> k) || k < 1 || k > kMaxBreakdownLength + 1) throw std::invalid_argument("breakdown state: bad length");
+            st.lengths_[k] = moments_of(in);
+        } else if (tag == "t") {
+            st.total_ = moments_of(in);
+            total = true;
+        } else if (!tag.empty()) {
+            throw std::invalid_argument("breakdown state: unknown line '" + tag + "'");
+        }
+    }
+    if (!total) throw std::invalid_argument("breakdown state: no total");
+    return st;
+}
+
+std::string breakdown_state_text(const BreakdownState& s) {
+    return fmt::format("region {} {}\n", s.region, s.max_length) + s.stats.serialize();
+}
+
+BreakdownState parse_breakdown_state(const std::string& text) {
+    BreakdownState s;
+    const size_t nl = text.find('\n');
+    std::istringstream head(text.substr(0, nl));
+    std::string tag;
+    if (!(head >> tag >> s.region >> s.max_length) || tag != "region" || s.max_length < 1 ||
+        s.max_length > kMaxBreakdownLength)
+        throw std::invalid_argument("breakdown state: no region line");
+    s.stats = BreakdownStats::deserialize(nl == std::string::npos ? std::string() : text.substr(nl + 1));
+    return s;
 }
 
 std::vector<const BreakdownRow*> BreakdownReport::of_kind(const std::string& kind) const {

@@ -71,6 +71,10 @@ public:
     // Units that added nothing to the region still count.
     void add_empty_unit() { ++units_; }
     void merge(const BreakdownStats& o);
+    // The exact sums as text (EXR header omega.breakdown_state of a partial render), so that
+    // `omega merge` combines parts' breakdowns exactly; deserialize throws std::invalid_argument.
+    std::string serialize() const;
+    static BreakdownStats deserialize(const std::string& text);
     uint64_t units() const { return units_; }
     const std::map<PathClassKey, BreakdownMoments>& classes() const { return classes_; }
     const std::map<int, BreakdownMoments>& lengths() const { return lengths_; }
@@ -101,6 +105,17 @@ struct BreakdownReport {
 };
 
 BreakdownReport make_breakdown_report(const BreakdownStats& stats, const std::string& region, int max_length);
+
+// What a partial render carries so that its breakdown merges exactly with other parts'
+// (EXR header omega.breakdown_state): the region, the length and the exact sums.
+struct BreakdownState {
+    std::string region;
+    int max_length = 6;
+    BreakdownStats stats;
+};
+std::string breakdown_state_text(const BreakdownState& s);
+// Throws std::invalid_argument for text breakdown_state_text would not write.
+BreakdownState parse_breakdown_state(const std::string& text);
 
 // "region,kind,class,length,mu,mu_stderr,fraction,fraction_stderr" and one line per row.
 std::string breakdown_csv(const BreakdownReport& r);

@@ -74,10 +74,12 @@ void BreakdownCollector::add_splatting_sample(int x, int y, const BdptScratch& s
     l.stats.add_unit(l.unit);
 }
 
-BreakdownReport BreakdownCollector::report() const {
+BreakdownStats BreakdownCollector::stats() const {
     BreakdownStats all;
     for (const Local& l : local_) all.merge(l.stats);  // exact sums: any order gives the same bits
-    return make_breakdown_report(all, region_name(), desc_.max_length);
+    return all;
 }
+
+BreakdownReport BreakdownCollector::report() const { return make_breakdown_report(stats(), region_name(), desc_.max_length); }
 
 }  // namespace omega

@@ -36,6 +36,8 @@ public:
                               const Filter& filter);
 
     BreakdownReport report() const;
+    // The per-thread sums merged (exactly: any order gives the same bits).
+    BreakdownStats stats() const;
     // "image", or "box:x0:y0:x1:y1".
     std::string region_name() const;
 

@@ -34,6 +34,24 @@ TEST(ExactSum, SameBitsInAnyOrderAndGrouping) {
     EXPECT_NEAR(a.value(), double(ref), 1e-12 * std::abs(double(ref)) + 1e-30);
 }
 
+TEST(ExactSum, TextRoundTrips) {
+    for (double v : {0.0, 1.0, -3.5e-90, 7.25e90, 1e-300}) {
+        ExactSum a;
+        a.add(v);
+        a.add(-0.25);
+        ExactSum b;
+        b.set_text(a.text());
+        EXPECT_EQ(a.digits(), b.digits()) << a.text();
+    }
+    ExactSum n;
+    n.add(1e200 * 1e200);
+    ExactSum m;
+    m.set_text(n.text());
+    EXPECT_TRUE(m.overflowed());
+    EXPECT_THROW(m.set_text("3:zz"), std::invalid_argument);
+    EXPECT_THROW(m.set_text("99:1"), std::invalid_argument);
+}
+
 TEST(ExactSum, CancellationAndOverflow) {
     ExactSum s;
     s.add(1e90);
@@ -123,6 +141,10 @@ TEST(BreakdownStats, FractionAndErrors) {
     ASSERT_EQ(back.rows.size(), r.rows.size());
     EXPECT_EQ(back.rows[0].name, "L E");
     EXPECT_THROW(parse_breakdown_csv("nonsense\n"), std::invalid_argument);
+    // The exact state round-trips to the same report.
+    const BreakdownState st = parse_breakdown_state(breakdown_state_text({"image", 6, s}));
+    EXPECT_EQ(breakdown_csv(make_breakdown_report(st.stats, st.region, st.max_length)), breakdown_csv(r));
+    EXPECT_THROW(parse_breakdown_state("region image 6\nc 1 0 0\n"), std::invalid_argument);
 }
 
 }  // namespace

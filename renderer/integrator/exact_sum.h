@@ -15,6 +15,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <string>
+#include <string_view>
 
 namespace omega {
 
@@ -76,6 +78,11 @@ public:
         return n.limbs_;
     }
     bool overflowed() const { return overflow_; }
+    // Text that set_text() reads back to the same digits: "nan" (overflowed), or "I:d,d,..."
+    // with the hex digits of limbs I, I+1, ... (the last may be negative); "0" for zero.
+    std::string text() const;
+    // Throws std::invalid_argument for text that text() would not write.
+    void set_text(std::string_view t);
     void set_digits(const std::array<int64_t, kLimbs>& d, bool overflow) {
         limbs_ = d;
         overflow_ = overflow;

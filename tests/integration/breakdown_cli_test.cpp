@@ -92,17 +92,25 @@ TEST_F(BreakdownCli, BadBoxExitsTwo) {
     }
 }
 
-// Parts of a render each carry their own range's breakdown; merge cannot combine them exactly,
-// so it drops them with a warning rather than passing one part's off as the whole's.
-TEST_F(BreakdownCli, MergeDropsPartBreakdownsWithAWarning) {
+// Parts carry their range's exact sums: merged, they give the breakdown of one render of the
+// whole range, digit for digit. A part without one cannot be combined: a warning, and none.
+TEST_F(BreakdownCli, MergeAddsPartBreakdownsExactly) {
     const std::string common = " -q --breakdown --threads 2";
-    ASSERT_EQ(test::run_omega("render " + scene_ + " --samples 0:2 -o " + path("p0.exr") + common).code, 0);
-    ASSERT_EQ(test::run_omega("render " + scene_ + " --samples 2:4 -o " + path("p1.exr") + common).code, 0);
-    EXPECT_TRUE(read_exr(path("p0.exr")).attributes.count("omega.breakdown"));
-    auto m = test::run_omega("merge " + path("p0.exr") + " " + path("p1.exr") + " -o " + path("m.exr"));
+    ASSERT_EQ(test::run_omega("render " + scene_ + " --spp 4 -o " + path("whole.exr") + common).code, 0);
+    ASSERT_EQ(test::run_omega("render " + scene_ + " --samples 0:3 -o " + path("p0.exr") + common).code, 0);
+    ASSERT_EQ(test::run_omega("render " + scene_ + " --samples 3:4 -o " + path("p1.exr") + common).code, 0);
+    ASSERT_EQ(test::run_omega("render " + scene_ + " --samples 3:4 -q -o " + path("plain.exr")).code, 0);
+    auto m = test::run_omega("merge " + path("p1.exr") + " " + path("p0.exr") + " -o " + path("m.exr"));
     ASSERT_EQ(m.code, 0) << m.output;
-    EXPECT_NE(m.output.find("breakdowns (omega.breakdown) are not merged"), std::string::npos) << m.output;
-    EXPECT_FALSE(read_exr(path("m.exr")).attributes.count("omega.breakdown"));
+    const auto whole = read_exr(path("whole.exr")).attributes, merged = read_exr(path("m.exr")).attributes;
+    ASSERT_TRUE(merged.count("omega.breakdown")) << m.output;
+    EXPECT_EQ(merged.at("omega.breakdown"), whole.at("omega.breakdown"));
+    EXPECT_NE(read_exr(path("p0.exr")).attributes.at("omega.breakdown"), whole.at("omega.breakdown"));
+
+    auto d = test::run_omega("merge " + path("p0.exr") + " " + path("plain.exr") + " -o " + path("d.exr"));
+    ASSERT_EQ(d.code, 0) << d.output;
+    EXPECT_NE(d.output.find("breakdowns are not merged"), std::string::npos) << d.output;
+    EXPECT_FALSE(read_exr(path("d.exr")).attributes.count("omega.breakdown"));
 }
 
 // converge --breakdown: per-class columns per checkpoint, and the line naming the class that
