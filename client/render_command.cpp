@@ -263,6 +263,7 @@ int run_render(const RenderArgs& a) {
     if (const BreakdownCollector* bc = session->breakdown()) {
         breakdown = bc->report();
         meta.attributes["omega.breakdown"] = breakdown_csv(*breakdown);
+        meta.attributes["omega.breakdown_samples"] = fmt::format("{}:{}", rs.first_sample, last.spp);
         // A part also carries the exact sums, which `omega merge` adds up exactly.
         if (range)
             meta.attributes["omega.breakdown_state"] =

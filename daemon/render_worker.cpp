@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "film/partial_exr.h"
 #include "integrator/render_session.h"
 #include "pathspace/classify.h"
 #include "pathspace/lpe_classify.h"
@@ -211,6 +212,22 @@ void RenderWorker::run() {
         for (std::size_t i = 0; i < aovs->size(); ++i)
           aovs->films()[i].film = Film::deserialize(desc.sensor.film, resume->aov_films[i]);
     }
+    // The breakdown's sums go on from the checkpoint's, when it holds them for this region and
+    // length (a job checkpointed before it had them restarts its breakdown at the resume).
+    long long breakdown_first = rs.first_sample;
+    if (BreakdownCollector* bc = session.breakdown(); bc && resume && !resume->breakdown_state.empty()) {
+      try {
+        BreakdownState st = parse_breakdown_state(resume->breakdown_state);
+        const SampleRange covered = parse_sample_range(resume->breakdown_samples);
+        if (st.region == bc->region_name() && st.max_length == bc->max_length() && covered.end == rs.first_sample) {
+          bc->add_base(st.stats);
+          breakdown_first = covered.begin;
+        }
+      } catch (const std::invalid_argument& e) {
+        log_.warn("job {}: the checkpoint's breakdown is unreadable ({}); it restarts at {} spp", spec_.job, e.what(),
+                  rs.first_sample);
+      }
+    }
     static const std::vector<AovFilm> kNoAovs;
     const std::vector<AovFilm>& aov_films = session.aovs() ? session.aovs()->films() : kNoAovs;
     {
@@ -264,8 +281,10 @@ void RenderWorker::run() {
       snap->integrator = integrator_name(desc.integrator.type);
       snap->seed = spec_.seed;
       if (const BreakdownCollector* bc = session.breakdown()) {
-        snap->breakdown = breakdown_csv(bc->report());
-        snap->breakdown_samples = fmt::format("{}:{}", rs.first_sample, r.spp);
+        BreakdownState st{bc->region_name(), bc->max_length(), bc->stats()};
+        snap->breakdown = breakdown_csv(make_breakdown_report(st.stats, st.region, st.max_length));
+        snap->breakdown_state = breakdown_state_text(st);
+        snap->breakdown_samples = fmt::format("{}:{}", breakdown_first, r.spp);
       }
       last = snap;
       last_on_disk = false;

@@ -75,7 +75,7 @@ void BreakdownCollector::add_splatting_sample(int x, int y, const BdptScratch& s
 }
 
 BreakdownStats BreakdownCollector::stats() const {
-    BreakdownStats all;
+    BreakdownStats all = base_;
     for (const Local& l : local_) all.merge(l.stats);  // exact sums: any order gives the same bits
     return all;
 }

@@ -36,8 +36,11 @@ public:
                               const Filter& filter);
 
     BreakdownReport report() const;
-    // The per-thread sums merged (exactly: any order gives the same bits).
+    // The per-thread sums merged (exactly: any order gives the same bits), with the base.
     BreakdownStats stats() const;
+    // Sums of samples rendered before (a resumed job's checkpoint), added to every report.
+    // Driver thread, before the render starts.
+    void add_base(const BreakdownStats& s) { base_.merge(s); }
     // "image", or "box:x0:y0:x1:y1".
     std::string region_name() const;
 
@@ -51,6 +54,7 @@ private:
         BreakdownUnit unit;
     };
     tbb::enumerable_thread_specific<Local> local_;
+    BreakdownStats base_;
 };
 
 // "x0,y0,x1,y1" to a box; throws std::invalid_argument naming what is wrong.

@@ -98,6 +98,7 @@ public:
     // The breakdown of the samples rendered by this session (settings().breakdown), null when
     // off. Read between passes, like film().
     const BreakdownCollector* breakdown() const { return breakdown_.get(); }
+    BreakdownCollector* breakdown() { return breakdown_.get(); }
 
 private:
     void render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats);
