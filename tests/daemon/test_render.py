@@ -4,9 +4,10 @@ with a mesh asset (sent once, then cached); a subscriber that joins after the en
 tracing's tiles go out as each finishes, not when the whole pass has."""
 import hashlib
 import os
+import subprocess
 import time
 
-from harness import SLOWDOWN, Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state, watch
+from harness import OMEGA, SLOWDOWN, Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state, watch
 
 SPP, SEED = 12, 7
 TRI_OBJ = b"v -0.5 0.2 -0.5\nv 0.5 0.2 -0.5\nv 0 1.2 0\nf 1 2 3\n"
@@ -97,11 +98,26 @@ def test_breakdown_in_fetch_and_result(tmp, daemons):
     scene = small_cornell().replace(b"film: {width: 80", b"film: {breakdown: {length: 4}, width: 80")
     assert b"breakdown:" in scene
     local, c, a = render_here_and_submit(tmp, daemons, scene, "breakdown")
+    d = daemons[-1]
     wait_state(c, a["job"], {"done"})
     fetched = c.job("fetch", a["job"])
     p = os.path.join(tmp, "breakdown-fetched.exr")
     write(p, fetched["_payload"])
     assert exr_equal(local, p, attrs=("omega.breakdown",)), "fetched breakdown differs from the local render's"
+    # `omega submit --breakdown` sets the same key in a scene that lacks it.
+    plain = os.path.join(tmp, "plain.yaml")
+    write(plain, small_cornell())
+    r = subprocess.run([OMEGA, "submit", plain, "--host", d.unix, "--spp", str(SPP), "--seed", str(SEED), "-q",
+                        "--breakdown", "--breakdown-length", "4"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    job = int(r.stdout.strip())
+    wait_state(c, job, {"done"})
+    p2 = os.path.join(tmp, "breakdown-submitted.exr")
+    write(p2, c.job("fetch", job)["_payload"])
+    assert exr_equal(local, p2, attrs=("omega.breakdown",)), "omega submit --breakdown differs from the local render's"
+    bad = subprocess.run([OMEGA, "submit", plain, "--host", d.unix, "--breakdown-box", "1,2"], capture_output=True,
+                         text=True, timeout=120)
+    assert bad.returncode == 2 and "breakdown box" in bad.stderr, bad.stderr
     c.close()
 
 
