@@ -81,7 +81,8 @@ std::vector<uint8_t> encode_planes(int width, int height, const Rect& rect, cons
                                    const ExrMeta& meta) {
     const Imath::Box2i display({0, 0}, {width - 1, height - 1});
     const Imath::Box2i data({rect.x0, rect.y0}, {rect.x1 - 1, rect.y1 - 1});
-    Imf::Header header(display, data, 1.f, Imath::V2f(0, 0), 1.f, Imf::INCREASING_Y, Imf::ZIP_COMPRESSION);
+    Imf::Header header(display, data, 1.f, Imath::V2f(0, 0), 1.f, Imf::INCREASING_Y,
+                       meta.compress ? Imf::ZIP_COMPRESSION : Imf::NO_COMPRESSION);
     for (int k = 0; k < 3; ++k) {
         header.channels().insert(kRgb[k], Imf::Channel(Imf::FLOAT));
         header.channels().insert(kVar[k], Imf::Channel(Imf::FLOAT));

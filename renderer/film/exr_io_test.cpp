@@ -199,6 +199,21 @@ TEST(Exr, TileEncodeDecodeRoundTrip) {
     for (const Rect& t : f.tiles(4)) expect_matches(decode_exr_memory(encode_exr_tile(f, t, ExrMeta{})), f, t);
     EXPECT_THROW(encode_exr_tile(f, Rect{0, 0, 4, 4}, ExrMeta{}), std::invalid_argument);
     EXPECT_THROW(decode_exr_memory(bytes, 5), std::runtime_error);  // over the pixel limit
+    // Uncompressed (the daemon's streamed tiles): the same pixels, and NONE in the header. The
+    // compression attribute is 1 byte after its name and type ("compression\0compression\0",
+    // size 1): 0 is NONE, 3 ZIP.
+    ExrMeta raw = make_meta();
+    raw.compress = false;
+    const auto plain = encode_exr_tile(f, tile, raw);
+    expect_matches(decode_exr_memory(plain), f, tile);
+    auto compression_of = [](const std::vector<uint8_t>& b) {
+        const std::string key("compression\0compression\0\1\0\0\0", 28);
+        const std::string s(b.begin(), b.end());
+        const size_t at = s.find(key);
+        return at == std::string::npos ? -1 : int(uint8_t(s[at + key.size()]));
+    };
+    EXPECT_EQ(compression_of(plain), 0);
+    EXPECT_EQ(compression_of(bytes), 3);
 }
 
 TEST(Exr, DecodeRejectsTruncatedAndGarbageInput) {

@@ -83,32 +83,6 @@ Filter::Filter(FilterType type, float radius, float gaussian_stddev) : type_(typ
     }
 }
 
-double Filter::pdf_1d(double x) const {
-    const double r = radius_;
-    if (std::abs(x) > r) return 0.0;
-    // A splat exactly on the border between two pixels (a focused point on a pixel corner, or a
-    // position rounded onto the float grid far from the origin) is shared half and half: the
-    // pixels' weights still sum to 1, and rounding to nearest moves no mass across the border
-    // on average. (Giving it to both read ~2x; to one side only shifted every border by half a
-    // float spacing, +0.5% at an offset of 1e5.)
-    const double edge = std::abs(x) == r ? 0.5 : 1.0;
-    return edge * pdf_1d_inside(x);
-}
-
-double Filter::pdf_1d_inside(double x) const {
-    const double r = radius_;
-    switch (type_) {
-        case FilterType::Box: return 0.5 / r;
-        case FilterType::Tent: return (r - std::abs(x)) / (r * r);
-        case FilterType::Gaussian: {
-            // Truncated (not shifted) Gaussian: renormalized by the mass inside the radius.
-            double z = x / sigma_;
-            return std::exp(-0.5 * z * z) / (sigma_ * std::sqrt(2.0 * kPiD) * erf_r_);
-        }
-    }
-    return 0.0;
-}
-
 double Filter::sample_1d(double u) const {
     const double r = radius_;
     double x = 0;

@@ -13,19 +13,16 @@ void AovImages::begin_batch() {
         clean_ = false;
         return;
     }
-    const size_t n = films_.empty() ? 0 : size_t(films_.front().film.crop().area());
-    camera_.resize(films_.size());
-    splats_.resize(films_.size());
-    for (size_t a = 0; a < films_.size(); ++a) {
-        camera_[a].assign(n, Vec3d(0.0));
-        splats_[a].assign(n, Vec3d(0.0));
-    }
+    const size_t n = films_.empty() ? 0 : size_t(films_.front().film.crop().area()) * films_.size();
+    camera_.assign(n, Vec3d(0.0));
+    splats_.assign(n, Vec3d(0.0));
 }
 
 void AovImages::add_batch(size_t pixel, const double* rescale) {
+    const size_t base = pixel * films_.size();
     for (size_t a = 0; a < films_.size(); ++a) {
-        Vec3d& c = camera_[a][pixel];
-        Vec3d& sp = splats_[a][pixel];
+        Vec3d& c = camera_[base + a];
+        Vec3d& sp = splats_[base + a];
         const Vec3d v = rescale ? c + sp * *rescale : c + sp;
         films_[a].film.add_weighted_at(pixel, v, 1.0);
         c = sp = Vec3d(0.0);

@@ -39,9 +39,10 @@ public:
     // Splatting integrators. begin_batch() zeroes the buffers (driver thread).
     void begin_batch();
     // `pixel` is the crop-relative row-major index (as the session's batch buffers).
-    void add_camera(size_t aov, size_t pixel, const Rgb& v) { camera_[aov][pixel] += Vec3d(v); }
+    void add_camera(size_t aov, size_t pixel, const Rgb& v) { camera_[pixel * films_.size() + aov] += Vec3d(v); }
     void add_splat(uint32_t mask, size_t pixel, const Vec3d& v) {
-        for (; mask; mask &= mask - 1) splats_[size_t(std::countr_zero(mask))][pixel] += v;
+        Vec3d* px = &splats_[pixel * films_.size()];
+        for (; mask; mask &= mask - 1) px[size_t(std::countr_zero(mask))] += v;
     }
     // The batch's value at crop pixel `pixel`: camera + splats, the splats times `rescale` when
     // the batch was cut (null: not cut; the beauty adds them unscaled then). Clears the pixel's sums.
@@ -52,7 +53,9 @@ public:
 private:
     LpeSet lpes_;
     std::vector<AovFilm> films_;
-    std::vector<std::vector<Vec3d>> camera_, splats_;  // per AOV, crop-sized
+    // Pixel-major (pixel * AOVs + aov): a splat's AOVs share cache lines, where one crop-sized
+    // buffer per AOV cost light tracing a cache miss per AOV per splatted pixel.
+    std::vector<Vec3d> camera_, splats_;
     bool clean_ = false;  // the buffers are sized and all zero
 };
 

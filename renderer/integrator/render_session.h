@@ -19,6 +19,7 @@
 #include "integrator/bdpt_tracer.h"
 #include "integrator/breakdown_collector.h"
 #include "integrator/path_tracer.h"
+#include "integrator/splat_bands.h"
 #include "integrator/strategy_images.h"
 #include "scene/scene.h"
 
@@ -123,6 +124,7 @@ private:
     tbb::enumerable_thread_specific<TracerStats> stats_;  // cache-aligned per thread
     tbb::enumerable_thread_specific<BdptScratch> scratch_;
     tbb::enumerable_thread_specific<std::vector<Splat>> sample_splats_;
+    std::unique_ptr<SplatBands> bands_;  // light tracing and BDPT: the crop's row bands
     std::vector<Vec3d> batch_sums_;    // crop-sized, one batch's camera estimates (driver thread only)
     std::vector<Vec3d> batch_splats_;  // crop-sized, one batch's light-path splats (driver thread only)
     std::atomic<bool> aborted_{false};

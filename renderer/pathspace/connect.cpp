@@ -177,7 +177,8 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
                                   Sampler& sampler, TracerStats& stats, ConnectStats& cstats,
                                   std::vector<PathVertex>* full_path, FullPathPdfs* pdfs) {
     Connection c;
-    PathVertex sampled;
+    // Only s = 1 and t = 1 sample an endpoint: most connections (s, t >= 2) skip building one.
+    std::optional<PathVertex> sampled;
     const PathVertex* sampled_light = nullptr;
     const PathVertex* sampled_sensor = nullptr;
     if (s == 0) {
@@ -202,8 +203,8 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         if (!sc) return std::nullopt;
         sampled = sensor_vertex(scene, sc->p);
         Sensor::Pdf pdf = sensor.pdf_we(sc->p, -sc->wi);
-        sampled.pdf_fwd = sensor.delta_direction() ? 1.0 : pdf.pos;
-        sampled_sensor = &sampled;
+        sampled->pdf_fwd = sensor.delta_direction() ? 1.0 : pdf.pos;
+        sampled_sensor = &*sampled;
         if (y.kind == VertexKind::Light) {
             // s = 1: the light itself seen by the sensor. Emission towards the sensor over the
             // density of the light endpoint (selection x position).
@@ -235,7 +236,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         auto ls = light_sample_li(scene, l, z.p(), sampler.next_2d());
         if (!ls || ls->pdf_sa <= 0 || is_black(ls->Li)) return std::nullopt;
         sampled = light_sample_vertex(li, *ls);
-        sampled_light = &sampled;
+        sampled_light = &*sampled;
         Rgb f = vertex_f(z, ls->wi, TransportMode::Radiance) * absdot(ls->wi, z.hit.ns);
         if (is_black(f)) return std::nullopt;
         c.L = z.beta * f * ls->Li / float(pmf * ls->pdf_sa);

@@ -41,9 +41,8 @@ Sensor Sensor::from_desc(const SensorDesc& d) {
     const FilmDesc& f = d.film;
     s.crop = f.has_crop ? Rect2i{f.crop[0], f.crop[1], f.crop[2], f.crop[3]} : Rect2i{0, 0, f.width, f.height};
     s.crop_pixels = double(s.crop.x1 - s.crop.x0) * double(s.crop.y1 - s.crop.y0);
-    s.filter = f.filter;
+    s.pixel_filter = Filter(f.filter, f.filter_radius, f.gaussian_stddev);
     s.filter_radius = f.filter_radius;
-    s.filter_stddev = f.gaussian_stddev;
     if (d.type == SensorType::Orthographic) {
         // World extent of the plane: to_world's x and y axis lengths scale the local [-1,1] x [-1/aspect, 1/aspect].
         double sx = length(d.to_world.vector({1, 0, 0})), sy = length(d.to_world.vector({0, 1, 0}));

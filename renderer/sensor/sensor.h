@@ -4,6 +4,7 @@
 #include <optional>
 #include <variant>
 
+#include "film/filter.h"
 #include "math/transform.h"
 #include "scene/ray.h"
 #include "scene/scene_desc.h"
@@ -37,8 +38,10 @@ struct Sensor {
     double pixel_area = 1;   // image-plane area of one pixel: at z = 1 (perspective, thin lens) or world units (orthographic)
     double crop_pixels = 1;  // pixels actually rendered
     Rect2i crop;
-    FilterType filter = FilterType::Box;
-    float filter_radius = 0.5f, filter_stddev = 0.5f;
+    // The film's reconstruction filter, built once (crop_coverage runs for every t = 1
+    // connection and every MIS table; building a Gaussian per call costs an erf).
+    Filter pixel_filter{FilterType::Box, 0.5f};
+    float filter_radius = 0.5f;
     // Sum over crop pixels of the filter weight at film position p: the fraction of the camera's
     // sampling density (uniform over the crop) that lands at p. 1 inside, less near the border.
     double crop_coverage(Vec2 p) const;

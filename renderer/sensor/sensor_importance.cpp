@@ -24,7 +24,7 @@ Vec3 mul_point(const float* m, const Vec3& p) {
 }  // namespace
 
 double Sensor::crop_coverage(Vec2 p) const {
-    Filter f(filter, filter_radius, filter_stddev);
+    const Filter& f = pixel_filter;
     auto axis = [&](double x, int lo, int hi) {
         int a = std::max(lo, int(std::floor(x - filter_radius - 0.5))), b = std::min(hi - 1, int(std::ceil(x + filter_radius - 0.5)));
         double sum = 0;

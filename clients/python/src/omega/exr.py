@@ -1,6 +1,6 @@
 """A small OpenEXR reader for what omegad sends: single-part scanline files, compression NONE,
-ZIPS or ZIP (omegad writes ZIP), channels HALF, FLOAT or UINT without subsampling. Anything else
-raises ExrError. The header is read with the standard library; pixels need numpy (zlib does the
+ZIPS or ZIP (omegad writes images with ZIP, streamed tiles with NONE), channels HALF, FLOAT or
+UINT without subsampling. Anything else raises ExrError. The header is read with the standard library; pixels need numpy (zlib does the
 inflating, numpy the predictor and the byte interleaving that OpenEXR's ZIP adds).
 """
 from __future__ import annotations
@@ -183,7 +183,7 @@ def decode(data: bytes) -> ExrImage:
     data = bytes(data)
     h = read_header(data)
     if h.compression not in _LINES_PER_CHUNK:
-        raise ExrError(f"EXR compression {h.compression} is not supported (omegad writes zip)")
+        raise ExrError(f"EXR compression {h.compression} is not supported (omegad writes none or zip)")
     x0, y0, x1, y1 = h.data_window
     width, height = x1 - x0, y1 - y0
     per_chunk = _LINES_PER_CHUNK[h.compression]
