@@ -14,6 +14,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "converge_breakdown.h"
 #include "film/film.h"
 #include "import_command.h"
 #include "integrator/render_session.h"
@@ -124,22 +125,6 @@ OIIO::ImageBuf film_image(const Film& film) {
     return buf;
 }
 
-// The image's own estimated relative variance (--no-reference): the film's variance of each
-// pixel's mean, relative to the mean squared, averaged over pixels and channels.
-double film_relvar(const Film& film) {
-    Rect c = film.crop();
-    double sum = 0;
-    for (int y = c.y0; y < c.y1; ++y)
-        for (int x = c.x0; x < c.x1; ++x) {
-            PixelStats p = film.pixel(x, y);
-            for (int ch = 0; ch < 3; ++ch) {
-                double d = std::max(std::abs(p.mean[ch]), kRelVarEps);
-                sum += p.var_of_mean[ch] / (d * d);
-            }
-        }
-    return sum / (3.0 * double(c.area()));
-}
-
 struct Sample {
     int run = 0;
     uint64_t seed = 0;
@@ -241,6 +226,11 @@ void add_converge_command(CLI::App& app, ConvergeArgs& a) {
                   "No reference: report each image's own estimated relative variance (mean of var / max(mean, 0.1)^2 "
                   "from the film's per-pixel variance) and fit its slope");
     cmd->add_option("-D,--define", a.defines, "Mitsuba XML scenes: set a <default> variable, name=value (repeatable)");
+    cmd->add_flag("--breakdown", a.breakdown,
+                  "Also measure the error per path class: a short pilot picks the classes carrying the most energy; "
+                  "writes NAME_classes.csv, classes.png and which class limits convergence");
+    cmd->add_option("--breakdown-classes", a.breakdown_classes, "--breakdown: how many classes (default 6)")
+        ->check(CLI::Range(1, 16));
 }
 
 int run_converge(const ConvergeArgs& a) {
@@ -348,6 +338,25 @@ int run_converge(const ConvergeArgs& a) {
         fmt::print("reference: {}\n", ref_note);
     }
 
+    // ---- the classes (--breakdown): a pilot with the first integrator, then the classes as AOVs
+    std::optional<ConvergeBreakdown> classes;
+    if (a.breakdown) {
+        IntegratorDesc id = desc.integrator;
+        const std::string& first = a.integrators.front();
+        id.type = first == "bdpt" ? IntegratorType::Bdpt : first == "light" ? IntegratorType::Light : IntegratorType::Path;
+        if (auto s = sampler_from_name(a.sampler)) id.sampler = *s;
+        const size_t room = size_t(kMaxAovs) - std::min(size_t(kMaxAovs), desc.sensor.film.aovs.size());
+        try {
+            classes.emplace(*scene, id, a.threads, a.seed + 2000003, std::clamp(a.budget_s / 4, 0.5, 10.0),
+                            int(std::min(room, size_t(a.breakdown_classes))));
+        } catch (const std::invalid_argument& e) {
+            fmt::print(stderr, "omega converge: --breakdown: {}\n", e.what());
+            return 2;
+        }
+        classes->add_aovs(desc.sensor.film);
+        scene = Scene::build(desc);
+    }
+
     // ---- the runs
     const std::vector<double> times = converge_times(a.budget_s);
     struct Result {
@@ -393,6 +402,7 @@ int run_converge(const ConvergeArgs& a) {
                 s.spp = r.spp;
                 s.time_s = r.elapsed_s - overhead;
                 if (variance_mode) s.relvar = film_relvar(session->film());
+                if (classes) classes->record(*session, {name, run, rs.seed, s.target, s.time_s, s.spp, 0, {}, {}});
                 snaps.emplace_back(s, variance_mode ? OIIO::ImageBuf() : film_image(session->film()));
                 overhead += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             });
@@ -472,16 +482,8 @@ int run_converge(const ConvergeArgs& a) {
     // ---- the plot
     if (!results.empty()) {
         fs::path gp = out_dir / "convergence.gp";
-        fs::path png = out_dir / "convergence.png";
         std::ofstream g(gp);
-        g << "# gnuplot script written by omega converge; run `gnuplot convergence.gp` in this folder\n";
-        g << "set terminal pngcairo size 1000,700 enhanced font 'sans,12'\n";
-        g << "set output 'convergence.png'\n";
-        g << "set datafile separator ','\n";
-        g << "set logscale xy 10\n";
-        g << "set format x '10^{%L}'\nset format y '10^{%L}'\n";
-        g << "set grid xtics ytics mxtics mytics\n";
-        g << "set xlabel 'render time (s, log scale)'\n";
+        write_gnuplot_preamble(g, "convergence.gp", "convergence.png");
         if (variance_mode)
             g << fmt::format("set ylabel 'estimated relvar  (mean of var/max(x,{})^2, log scale)'\n", kRelVarEps);
         else
@@ -503,16 +505,9 @@ int run_converge(const ConvergeArgs& a) {
         }
         g << "ideal(x) with lines dt 2 lc rgb 'gray40' title 'slope -1 (ideal 1/t)'\n";
         g.close();
-        std::string cmd = fmt::format("cd '{}' && gnuplot convergence.gp 2>&1", out_dir.string());
-        int rc = std::system(cmd.c_str());
-        if (rc == 0 && fs::exists(png))
-            fmt::print("\nplot: {}\n", png.string());
-        else
-            fmt::print(stderr,
-                       "omega converge: could not run gnuplot (install it with scripts/install-deps); the plot script "
-                       "is {}\n",
-                       gp.string());
+        run_gnuplot(out_dir, "convergence.gp", "convergence.png");
     }
+    if (classes) classes->write(out_dir);
     fmt::print("CSV files: {}\n", out_dir.string());
     if (!refused.empty()) {
         std::string list;

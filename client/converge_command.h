@@ -27,6 +27,9 @@ struct ConvergeArgs {
     // (from the film's per-pixel variance, the EXR's var.* channels) instead of an error.
     bool no_reference = false;
     std::vector<std::string> defines;
+    // --breakdown: error per path class (client/converge_breakdown.h), for this many classes.
+    bool breakdown = false;
+    int breakdown_classes = 6;
 };
 
 struct CompareArgs {

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "film/partial_exr.h"
+#include "integrator/breakdown.h"
 
 namespace omega {
 
@@ -16,6 +17,37 @@ void add_merge_command(CLI::App& app, MergeArgs& a) {
     cmd->add_flag("-q,--quiet", a.quiet, "Print nothing on success");
 }
 
+namespace {
+
+// The parts' breakdowns (omega render --samples A:B --breakdown): their exact sums add up to the
+// breakdown of the merged range, bit for bit what one render of it reports. Parts without the
+// sums, or of another region or length, cannot be combined: the output then carries none, and
+// says so.
+void merge_breakdowns(const std::vector<ExrMeta>& parts, const std::string& output, ExrMeta& out) {
+    size_t with = 0;
+    for (const ExrMeta& m : parts) with += m.attributes.count("omega.breakdown") + m.attributes.count("omega.breakdown_state");
+    if (with == 0) return;
+    try {
+        std::optional<BreakdownState> all;
+        for (const ExrMeta& m : parts) {
+            auto it = m.attributes.find("omega.breakdown_state");
+            if (it == m.attributes.end()) throw std::invalid_argument("a part carries no omega.breakdown_state");
+            BreakdownState s = parse_breakdown_state(it->second);
+            if (!all) all = std::move(s);
+            else if (s.region != all->region || s.max_length != all->max_length)
+                throw std::invalid_argument("the parts' breakdowns differ in region or length");
+            else all->stats.merge(s.stats);
+        }
+        out.attributes["omega.breakdown"] = breakdown_csv(make_breakdown_report(all->stats, all->region, all->max_length));
+        out.attributes["omega.breakdown_state"] = breakdown_state_text(*all);
+    } catch (const std::invalid_argument& e) {
+        fmt::print(stderr, "omega merge: warning: the parts' path-class breakdowns are not merged ({}); {} carries none\n",
+                   e.what(), output);
+    }
+}
+
+}  // namespace
+
 int run_merge(const MergeArgs& a) {
     std::vector<PartialRender> parts;
     parts.reserve(a.parts.size());
@@ -25,6 +57,8 @@ int run_merge(const MergeArgs& a) {
         fmt::print(stderr, "omega merge: {}\n", e.what());
         return 2;
     }
+    std::vector<ExrMeta> parts_meta;
+    for (const PartialRender& p : parts) parts_meta.push_back(p.meta);
     std::optional<MergeResult> merged;
     try {
         merged.emplace(merge_parts(std::move(parts), a.allow_gaps));
@@ -32,6 +66,7 @@ int run_merge(const MergeArgs& a) {
         fmt::print(stderr, "omega merge: {}\n", e.what());
         return 2;
     }
+    merge_breakdowns(parts_meta, a.output, merged->meta);
     try {
         append_aov_layers(merged->aovs, merged->meta);
         write_partial_exr(a.output, merged->film, merged->meta, merged->part, merged->aovs);

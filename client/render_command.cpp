@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "breakdown_output.h"
 #include "client_error.h"
 #include "film/film.h"
 #include "film/partial_exr.h"
@@ -106,6 +107,17 @@ void add_render_command(CLI::App& app, RenderArgs& a) {
                     "Also write the light carried by the paths a light path expression matches, as EXR layers "
                     "aov.NAME.R/G/B and aov.NAME.var.R/G/B: NAME=EXPR, e.g. caustics='L S+ D E' (repeatable; "
                     "replaces a scene aov of the same name; see docs/scene-format.md)");
+    cmd->add_flag("--breakdown", a.breakdown,
+                  "Estimate how much of the image each path class (L, S, D, E) and each path length carries, "
+                  "with standard errors: a table, NAME.breakdown.csv, NAME.breakdown.png and the EXR header "
+                  "attribute omega.breakdown (docs/breakdown.md)");
+    cmd->add_option("--breakdown-length", a.breakdown_length,
+                    "--breakdown: classes up to this many edges; longer paths form one row (default 6)")
+        ->check(CLI::Range(1, kMaxBreakdownLength));
+    cmd->add_option("--breakdown-box", a.breakdown_box,
+                    "--breakdown: measure the pixel box x0,y0,x1,y1 ([x0, x1) x [y0, y1), inside the crop) "
+                    "instead of the whole image");
+    cmd->add_option("--breakdown-csv", a.breakdown_csv, "--breakdown: the CSV's path (default NAME.breakdown.csv)");
     cmd->add_option("--camera", a.camera, "glTF scenes: render this camera (node or camera name; default: the first)");
 }
 
@@ -179,6 +191,19 @@ int run_render(const RenderArgs& a) {
     rs.seed = a.seed;
     rs.integrator = desc.integrator;
     rs.strategy_images_max_k = a.strategies;
+    if (a.breakdown || !a.breakdown_box.empty()) {
+        BreakdownDesc bd;
+        bd.max_length = a.breakdown_length;
+        if (!a.breakdown_box.empty()) {
+            try {
+                bd.box = parse_breakdown_box(a.breakdown_box);
+            } catch (const std::invalid_argument& e) {
+                fmt::print(stderr, "omega: --breakdown-box: {}\n", e.what());
+                return 2;
+            }
+        }
+        rs.breakdown = bd;
+    }
     if (a.strategies > 0 && desc.integrator.type == IntegratorType::Path)
         fmt::print(stderr, "omega: warning: --strategies needs --integrator bdpt or light; ignored\n");
 
@@ -234,6 +259,16 @@ int run_render(const RenderArgs& a) {
     static const std::vector<AovFilm> kNoAovs;
     const std::vector<AovFilm>& aovs = session->aovs() ? session->aovs()->films() : kNoAovs;
     append_aov_layers(aovs, meta);
+    std::optional<BreakdownReport> breakdown;
+    if (const BreakdownCollector* bc = session->breakdown()) {
+        breakdown = bc->report();
+        meta.attributes["omega.breakdown"] = breakdown_csv(*breakdown);
+        meta.attributes["omega.breakdown_samples"] = fmt::format("{}:{}", rs.first_sample, last.spp);
+        // A part also carries the exact sums, which `omega merge` adds up exactly.
+        if (range)
+            meta.attributes["omega.breakdown_state"] =
+                breakdown_state_text({bc->region_name(), bc->max_length(), bc->stats()});
+    }
     try {
         if (range) {
             PartInfo part{{{range->begin, last.spp}}, scene_hash, a.seed, meta.integrator,
@@ -245,6 +280,11 @@ int run_render(const RenderArgs& a) {
     } catch (const std::exception& e) {
         fmt::print(stderr, "omega: {}\n", e.what());
         return 1;
+    }
+    if (breakdown) {
+        fmt::print("{}", breakdown_table(*breakdown));
+        const int rc = write_breakdown_files(*breakdown, out, a.breakdown_csv);
+        if (rc != 0) return rc;
     }
     const std::string what = range ? fmt::format("samples {}:{} ({} spp)", range->begin, last.spp, meta.spp)
                                    : fmt::format("{} spp", last.spp);

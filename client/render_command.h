@@ -25,6 +25,11 @@ struct RenderArgs {
     std::string camera;                // --camera NAME, for glTF scenes
     std::string samples;  // "A:B": a partial render of sample indices [A, B), for `omega merge`
     std::vector<std::string> aovs;  // --aov NAME=EXPR (repeatable): light path expression outputs
+    // --breakdown: the measurement by path class and length (docs/breakdown.md).
+    bool breakdown = false;
+    int breakdown_length = 6;
+    std::string breakdown_box;  // "x0,y0,x1,y1"; empty: the whole crop
+    std::string breakdown_csv;  // empty: next to the output, NAME.breakdown.csv
 };
 
 void add_render_command(CLI::App& app, RenderArgs& args);

@@ -8,6 +8,10 @@
 #include <set>
 #include <sstream>
 
+#include <yaml-cpp/yaml.h>
+
+#include "client_error.h"
+#include "integrator/breakdown_collector.h"
 #include "remote_common.h"
 
 namespace omega::client {
@@ -102,11 +106,47 @@ void add_submit_command(CLI::App& app, SubmitArgs& a) {
     cmd->add_option("--unit-spp", a.unit_spp, "Samples per work unit (default: sized to a few seconds each)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 40));
     cmd->add_flag("-q,--quiet", a.quiet, "Print only the job id");
+    cmd->add_flag("--breakdown", a.breakdown,
+                  "Ask for the path-class breakdown (the film key `breakdown`, set in the submitted scene): the "
+                  "fetched image and the result carry omega.breakdown (docs/breakdown.md)");
+    cmd->add_option("--breakdown-length", a.breakdown_length, "--breakdown: classes up to this many edges (default 6)")
+        ->check(CLI::Range(1, kMaxBreakdownLength));
+    cmd->add_option("--breakdown-box", a.breakdown_box, "--breakdown: measure the pixel box x0,y0,x1,y1");
 }
+
+namespace {
+
+// The scene with its film's `breakdown` set: the job option travels in the scene, as `aov` does.
+// Throws ClientError (bad input) for a malformed box.
+std::string scene_with_breakdown(const std::string& yaml, const SubmitArgs& a) {
+    YAML::Node root = YAML::Load(yaml);
+    YAML::Node bd;
+    bd["length"] = a.breakdown_length;
+    if (!a.breakdown_box.empty()) {
+        Rect b;
+        try {
+            b = parse_breakdown_box(a.breakdown_box);
+        } catch (const std::invalid_argument& e) {
+            throw ClientError(kExitBadInput, std::string("--breakdown-box: ") + e.what());
+        }
+        YAML::Node box;
+        for (int v : {b.x0, b.y0, b.x1, b.y1}) box.push_back(v);
+        box.SetStyle(YAML::EmitterStyle::Flow);
+        bd["box"] = box;
+    }
+    bd.SetStyle(YAML::EmitterStyle::Flow);
+    root["sensor"]["film"]["breakdown"] = bd;
+    YAML::Emitter out;
+    out << root;
+    return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace
 
 int run_submit(const SubmitArgs& a) {
     return guarded([&] {
         ScannedScene scene = scan_scene(a.scene);
+        if (a.breakdown || !a.breakdown_box.empty()) scene.yaml = scene_with_breakdown(scene.yaml, a);
         if (!a.quiet)
             for (const auto& w : scene.warnings) std::fprintf(stderr, "omega: warning: %s\n", w.c_str());
         JobSpec spec;

@@ -43,6 +43,10 @@ struct SubmitArgs {
     std::optional<uint32_t> workers;
     std::optional<uint64_t> unit_spp;
     bool quiet = false;
+    // --breakdown: sets the film key `breakdown` of the submitted scene (docs/breakdown.md).
+    bool breakdown = false;
+    int breakdown_length = 6;
+    std::string breakdown_box;
 };
 
 void add_submit_command(CLI::App& app, SubmitArgs& args);

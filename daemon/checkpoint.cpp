@@ -14,6 +14,8 @@ namespace omega::daemon {
 namespace {
 
 constexpr char kMagic[8] = {'O', 'M', 'G', 'C', 'K', 'P', 'T', '1'};
+// Starts the optional breakdown section ("BDK1"): no AOV count (1 to 32) can equal it.
+constexpr std::uint32_t kBreakdownTag = 0x314b4442;
 
 [[noreturn]] void io_fail(const std::string& path, const std::string& what) {
   throw std::runtime_error(path + ": " + what + ": " + std::strerror(errno));
@@ -106,6 +108,14 @@ void write_checkpoint(const std::string& path, const FilmSnapshot& s) {
       body.append(reinterpret_cast<const char*>(f.data()), f.size());
     }
   }
+  // Optional breakdown section, last: a tag no AOV count can equal, then the two strings.
+  if (!s.breakdown_state.empty()) {
+    put(body, kBreakdownTag);
+    for (const std::string* t : {&s.breakdown_samples, &s.breakdown_state}) {
+      put(body, std::uint64_t(t->size()));
+      body += *t;
+    }
+  }
   std::string file(kMagic, sizeof kMagic);
   put(file, fnv1a(body));
   file += body;
@@ -135,13 +145,27 @@ std::optional<FilmSnapshot> read_checkpoint(const std::string& path) {
     if (n > v.size()) throw std::runtime_error("truncated film");
     s.film.assign(v.begin(), v.begin() + std::ptrdiff_t(n));
     v.remove_prefix(n);
-    if (!v.empty()) {
+    auto peek_tag = [&v] {
+      std::uint32_t t = 0;
+      if (v.size() >= sizeof t) std::memcpy(&t, v.data(), sizeof t);
+      return t;
+    };
+    if (!v.empty() && peek_tag() != kBreakdownTag) {
       const auto count = get<std::uint32_t>(v);
       if (count == 0 || count > 32) throw std::runtime_error("bad aov count " + std::to_string(count));
       for (std::uint32_t i = 0; i < count; ++i) {
         auto m = get<std::uint64_t>(v);
         if (m > v.size()) throw std::runtime_error("truncated aov film");
         s.aov_films.emplace_back(v.begin(), v.begin() + std::ptrdiff_t(m));
+        v.remove_prefix(m);
+      }
+    }
+    if (!v.empty()) {
+      if (get<std::uint32_t>(v) != kBreakdownTag) throw std::runtime_error("trailing bytes");
+      for (std::string* t : {&s.breakdown_samples, &s.breakdown_state}) {
+        auto m = get<std::uint64_t>(v);
+        if (m > v.size()) throw std::runtime_error("truncated breakdown");
+        t->assign(v.data(), m);
         v.remove_prefix(m);
       }
       if (!v.empty()) throw std::runtime_error("trailing bytes");

@@ -22,9 +22,15 @@ struct FilmSnapshot {
   // Film::serialize() of each light path expression output, in the film's `aov` order (empty
   // without AOVs; a checkpoint then has no AOV section, byte for byte as before AOVs existed).
   std::vector<std::vector<std::uint8_t>> aov_films;
-  // In memory only (not in the checkpoint file): what tile EXRs report in their omega.* header.
+  // The path-class breakdown (film key `breakdown`): its exact sums (breakdown_state_text) and
+  // the samples they cover ("A:B"), in an optional section after the AOVs, so that a resumed job
+  // goes on adding to them. Empty without a breakdown.
+  std::string breakdown_state, breakdown_samples;
+  // In memory only (not in the checkpoint file): what tile EXRs report in their omega.* header,
+  // and the breakdown's report (breakdown_csv text) for fetched images.
   std::string integrator;  // "path", "light" or "bdpt"; empty until known
   std::uint64_t seed = 0;
+  std::string breakdown;
 };
 
 // Any thread. Writes PATH.tmp, fsyncs it, renames it over PATH and fsyncs the directory.

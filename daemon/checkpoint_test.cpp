@@ -139,3 +139,32 @@ TEST(Config, ReadsEveryKeyAndNamesTheBadOne) {
 
 }  // namespace
 }  // namespace omega::daemon
+
+namespace omega::daemon {
+namespace {
+
+// The breakdown's sums ride after the film (and the AOVs, if any), and read back as written;
+// a checkpoint without them keeps its old layout.
+TEST(Checkpoint, CarriesTheBreakdown) {
+  std::string p = temp("ck-breakdown.bin");
+  for (bool aovs : {false, true}) {
+    FilmSnapshot s;
+    s.spp = 8;
+    s.film = {1, 2, 3};
+    if (aovs) s.aov_films = {{9, 8}, {7}};
+    s.breakdown_samples = "0:8";
+    s.breakdown_state = "region image 6\nunits 3\nt 0 0 0\n";
+    write_checkpoint(p, s);
+    auto r = read_checkpoint(p);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->film, s.film);
+    EXPECT_EQ(r->aov_films, s.aov_films);
+    EXPECT_EQ(r->breakdown_samples, s.breakdown_samples);
+    EXPECT_EQ(r->breakdown_state, s.breakdown_state);
+    EXPECT_TRUE(r->breakdown.empty());  // the report is in memory only
+  }
+  std::filesystem::remove(p);
+}
+
+}  // namespace
+}  // namespace omega::daemon

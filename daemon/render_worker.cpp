@@ -8,6 +8,9 @@
 #include <chrono>
 #include <cmath>
 
+#include <fmt/format.h>
+
+#include "film/partial_exr.h"
 #include "integrator/render_session.h"
 #include "pathspace/classify.h"
 #include "pathspace/lpe_classify.h"
@@ -29,6 +32,14 @@ const char* to_string(StopKind k) {
 }
 
 namespace {
+
+// omega.breakdown and omega.breakdown_samples, when the job has a breakdown: whole images only
+// (fetch, result), not every tile.
+void add_breakdown_attributes(const FilmSnapshot& s, ExrMeta& m) {
+  if (s.breakdown.empty()) return;
+  m.attributes["omega.breakdown"] = s.breakdown;
+  m.attributes["omega.breakdown_samples"] = s.breakdown_samples;
+}
 
 ExrMeta meta_of(const FilmSnapshot& s) {
   ExrMeta m;
@@ -66,6 +77,7 @@ std::vector<EncodedTile> encode_tiles(const Film& film, int tile_size, const Fil
 std::string encode_image(const Film& film, const FilmSnapshot& meta, const std::vector<AovFilm>& aovs) {
   ExrMeta m = meta_of(meta);
   append_aov_layers(aovs, m);
+  add_breakdown_attributes(meta, m);
   auto bytes = encode_exr_tile(film, film.crop(), m);
   return std::string(bytes.begin(), bytes.end());
 }
@@ -196,6 +208,22 @@ void RenderWorker::run() {
         for (std::size_t i = 0; i < aovs->size(); ++i)
           aovs->films()[i].film = Film::deserialize(desc.sensor.film, resume->aov_films[i]);
     }
+    // The breakdown's sums go on from the checkpoint's, when it holds them for this region and
+    // length (a job checkpointed before it had them restarts its breakdown at the resume).
+    long long breakdown_first = rs.first_sample;
+    if (BreakdownCollector* bc = session.breakdown(); bc && resume && !resume->breakdown_state.empty()) {
+      try {
+        BreakdownState st = parse_breakdown_state(resume->breakdown_state);
+        const SampleRange covered = parse_sample_range(resume->breakdown_samples);
+        if (st.region == bc->region_name() && st.max_length == bc->max_length() && covered.end == rs.first_sample) {
+          bc->add_base(st.stats);
+          breakdown_first = covered.begin;
+        }
+      } catch (const std::invalid_argument& e) {
+        log_.warn("job {}: the checkpoint's breakdown is unreadable ({}); it restarts at {} spp", spec_.job, e.what(),
+                  rs.first_sample);
+      }
+    }
     static const std::vector<AovFilm> kNoAovs;
     const std::vector<AovFilm>& aov_films = session.aovs() ? session.aovs()->films() : kNoAovs;
     {
@@ -248,6 +276,12 @@ void RenderWorker::run() {
       for (const AovFilm& a : aov_films) snap->aov_films.push_back(a.film.serialize());
       snap->integrator = integrator_name(desc.integrator.type);
       snap->seed = spec_.seed;
+      if (const BreakdownCollector* bc = session.breakdown()) {
+        BreakdownState st{bc->region_name(), bc->max_length(), bc->stats()};
+        snap->breakdown = breakdown_csv(make_breakdown_report(st.stats, st.region, st.max_length));
+        snap->breakdown_state = breakdown_state_text(st);
+        snap->breakdown_samples = fmt::format("{}:{}", breakdown_first, r.spp);
+      }
       last = snap;
       last_on_disk = false;
       const bool draining = stop_requested() == StopKind::drain;
@@ -300,6 +334,7 @@ void RenderWorker::run() {
       m.warnings = desc.warnings;
       m.rel_error = meta.rel_error.value_or(0);
       append_aov_layers(aov_films, m);
+      add_breakdown_attributes(meta, m);
       write_exr(spec_.paths.result(), session.film(), m);
       result.outcome = WorkerResult::Outcome::done;
     } else {

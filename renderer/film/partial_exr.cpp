@@ -193,6 +193,9 @@ PartialRender read_partial_exr(const std::string& path) {
     const auto sampler = img.attributes.find("omega.sampler");
     out.part.sampler = sampler == img.attributes.end() ? "independent" : sampler->second;
     out.meta.attributes["omega.sampler"] = out.part.sampler;
+    // A part's breakdown (its own range's report and exact sums): `omega merge` adds the sums up.
+    for (const char* key : {"omega.breakdown", "omega.breakdown_state"})
+        if (auto it = img.attributes.find(key); it != img.attributes.end()) out.meta.attributes[key] = it->second;
     const std::string seed = attr("omega.seed");
     if (std::from_chars(seed.data(), seed.data() + seed.size(), out.part.seed).ptr != seed.data() + seed.size())
         throw fail("omega.seed is not a number");

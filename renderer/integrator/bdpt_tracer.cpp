@@ -46,6 +46,19 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
         for (size_t a = 0; a < aovs_->size(); ++a) scratch.aov_camera[a] = Rgb(0.f);
         scratch.lpe.prepare(*aovs_, lit, n_light, cam, n_cam);
     }
+    if (breakdown_length_ > 0) {
+        scratch.class_camera.clear();
+        scratch.splat_classes.clear();
+        // Longer paths are one class: vertices past the breakdown's length never matter.
+        auto delta_bits = [&](const std::vector<PathVertex>& v, int n) {
+            uint64_t bits = 0;
+            for (int i = 1; i < std::min(n, kMaxBreakdownLength + 2); ++i)
+                if (v[size_t(i)].delta) bits |= uint64_t(1) << (i - 1);
+            return bits;
+        };
+        scratch.light_delta = delta_bits(lit, n_light);
+        scratch.camera_delta = delta_bits(cam, n_cam);
+    }
     if (use_t0_) {
         for (const LensCrossing& lc : scratch.lens) {
             if (max_depth_ >= 0 && lc.s > max_depth_) continue;  // k = s edges
@@ -56,6 +69,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             if (per_strategy) per_strategy->push_back({lc.s + 1, 0, unweighted, weighted, true, c->film});
             const uint32_t mask = aovs_ ? scratch.lpe.match_lens(lc.s) : 0;
             splats.push_back({c->film, weighted, mask});
+            if (breakdown_length_ > 0) record_class(scratch, lc.s, 0, false, true, weighted);
         }
     }
     // t = 1 needs no camera subpath; s = 1 samples its light vertex afresh (next-event estimation).
@@ -81,6 +95,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             // The full path as this strategy built it, connection included, matched before its
             // MIS-weighted value goes anywhere.
             const uint32_t mask = aovs_ ? scratch.lpe.match(s, t) : 0;
+            if (breakdown_length_ > 0) record_class(scratch, s, t, false, c->splat, weighted);
             if (c->splat) {
                 splats.push_back({c->film, weighted, mask});
             } else {
@@ -103,6 +118,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
                     Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
                     Rgb weighted = unweighted * float(c->weight);
                     const uint32_t mask = aovs_ ? scratch.lpe.match(s, t, true) : 0;
+                    if (breakdown_length_ > 0) record_class(scratch, s, t, true, c->splat, weighted);
                     if (c->splat) {
                         splats.push_back({c->film, weighted, mask});
                     } else {
@@ -113,6 +129,14 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             }
     }
     return L;
+}
+
+void BdptTracer::record_class(BdptScratch& scratch, int s, int t, bool via_mirror, bool splat, const Rgb& weighted) const {
+    const PathClassKey key = t == 0 ? lens_class_key(scratch.light_delta, s, breakdown_length_)
+                                    : strategy_class_key(scratch.light_delta, scratch.camera_delta, s, t, via_mirror,
+                                                         breakdown_length_);
+    if (splat) scratch.splat_classes.push_back(key);
+    else if (!is_black(weighted)) scratch.class_camera.emplace_back(key, weighted);
 }
 
 }  // namespace omega

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "integrator/bdpt_lpe.h"
+#include "integrator/path_class.h"
 #include "integrator/path_tracer.h"
 #include "pathspace/classify.h"
 #include "pathspace/connect.h"
@@ -30,6 +31,11 @@ struct BdptScratch {
     // (t >= 2) sums per AOV of the last sample() (zeroed by it).
     BdptLpeMatcher lpe;
     std::array<Rgb, kMaxAovs> aov_camera{};
+    // With the path-class breakdown: the last sample()'s camera-side contributions by class,
+    // and the class of each splat it appended (in the same order); signature is scratch.
+    std::vector<std::pair<PathClassKey, Rgb>> class_camera;
+    std::vector<PathClassKey> splat_classes;
+    uint64_t light_delta = 0, camera_delta = 0;  // bit i - 1: vertex i of the subpath is delta (path_class.h)
 };
 
 struct StrategyContribution {
@@ -54,6 +60,11 @@ public:
     // scratch.aov_camera the camera-side values.
     void set_aovs(const LpeSet* aovs) { aovs_ = aovs && !aovs->empty() ? aovs : nullptr; }
 
+    // The path-class breakdown (integrator/breakdown.h): classes up to this length (0: off);
+    // set before sampling starts. scratch.class_camera and scratch.splat_classes then hold
+    // each sample's contributions by class.
+    void set_breakdown(int max_length) { breakdown_length_ = max_length; }
+
     const StrategySet& strategies() const { return set_; }
     const StrategyPlan& plan() const { return plan_; }
 
@@ -66,6 +77,10 @@ private:
     WalkLimits camera_limits_, light_limits_;
     std::shared_ptr<const PlanarMirrors> mirrors_;  // the connector's mirrors (set_.mirrors points here); null if none
     const LpeSet* aovs_ = nullptr;
+    int breakdown_length_ = 0;
+    // The breakdown's record of one contribution of strategy (s, t) (t = 0: the lens; via_mirror:
+    // through the connector's mirror). Called on the sampling thread.
+    void record_class(BdptScratch& scratch, int s, int t, bool via_mirror, bool splat, const Rgb& weighted) const;
 };
 
 }  // namespace omega

@@ -59,7 +59,8 @@ Rgb PathTracer::sample_direct_via_mirrors(const SurfaceHit& hit, const Frame& sh
     return L;
 }
 
-Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLpeTracker* lpe) const {
+Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLpeTracker* lpe,
+                         PathClassTracker* classes) const {
     const int max_depth = settings_.max_depth >= 0 ? settings_.max_depth : kMaxUnboundedDepth;
     const bool nee = settings_.light_sampling;
     Rgb L(0.f), beta(1.f);
@@ -97,6 +98,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
                 const Rgb c = beta * le * w;
                 L += c;
                 if (lpe) lpe->emit(c);
+                if (classes) classes->emit(k, c);
             }
             break;
         }
@@ -117,6 +119,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
                 const Rgb c = beta * le * w;
                 L += c;
                 if (lpe) lpe->emit(c);
+                if (classes) classes->emit(k, c);
             }
         }
         if (k >= max_depth) break;  // the next edge would exceed max_depth
@@ -135,6 +138,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
             const Rgb c = beta * sample_direct(hit, shading, wo_local, bsdf, sampler, stats);
             L += c;
             if (lpe) lpe->emit_via(bsdf, c);
+            if (classes) classes->emit_via(k, c);
         }
         // The connector's chain has two more edges: x -> mirror -> light.
         const bool connector = mirrors_ && nondelta && k + 2 <= max_depth;
@@ -142,6 +146,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
             const Rgb c = beta * sample_direct_via_mirrors(hit, shading, wo_local, bsdf, k, sampler, stats);
             L += c;
             if (lpe) lpe->emit_via_mirror(bsdf, c);  // x, then the mirror (S), then L
+            if (classes) classes->emit_via_mirror(k, c);
         }
 
         sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
@@ -167,6 +172,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
         origin_pdf_sa = bs->pdf_sa;
         prev_delta = bs->is_delta();
         if (lpe) lpe->scatter(bsdf, prev_delta);
+        if (classes) classes->scatter(k, prev_delta);
         prev_pdf_sa = bs->pdf_sa;
         prev_p = hit.p;
         if (bs->lobe & kLobeTransmission) eta_scale *= sqr(bs->eta);

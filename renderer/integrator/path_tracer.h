@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "integrator/lpe_tracker.h"
+#include "integrator/path_class.h"
 #include "sampling/sampler.h"
 #include "scene/scene.h"
 
@@ -40,8 +41,10 @@ public:
     // Radiance along `ray`. Called concurrently from render threads; touches only `sampler` and
     // `stats` (and `lpe`). Bounce k draws from the camera-walk block of vertex k (see
     // sampling/sampler.h). With `lpe` (reset by the caller), every contribution is also offered
-    // to the AOVs; the returned radiance is bit-identical either way.
-    Rgb radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLpeTracker* lpe = nullptr) const;
+    // to the AOVs; with `classes` (reset by the caller), to the path-class breakdown. The
+    // returned radiance is bit-identical either way.
+    Rgb radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLpeTracker* lpe = nullptr,
+                 PathClassTracker* classes = nullptr) const;
 
 private:
     Rgb sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,

@@ -46,9 +46,20 @@ RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
     check_settings(settings);
     const FilmDesc& fd = scene.desc().sensor.film;
     if (!fd.aovs.empty()) aovs_ = std::make_unique<AovImages>(fd, fd.aovs);
-    if (settings.integrator.type != IntegratorType::Path) {
+    const bool splatting = settings.integrator.type != IntegratorType::Path;
+    // The settings' breakdown (omega render --breakdown), else the film's (the scene key, which
+    // is how a daemon job asks for one).
+    if (!settings_.breakdown && fd.breakdown) {
+        BreakdownDesc bd;
+        bd.max_length = fd.breakdown->length;
+        if (const auto& b = fd.breakdown->box) bd.box = Rect{(*b)[0], (*b)[1], (*b)[2], (*b)[3]};
+        settings_.breakdown = bd;
+    }
+    if (settings_.breakdown) breakdown_ = std::make_unique<BreakdownCollector>(*settings_.breakdown, film_.crop(), splatting);
+    if (splatting) {
         bdpt_ = std::make_unique<BdptTracer>(scene, settings.integrator);
         if (aovs_) bdpt_->set_aovs(&aovs_->lpes());
+        if (breakdown_) bdpt_->set_breakdown(breakdown_->max_length());
         bands_ = std::make_unique<SplatBands>(film_.crop(), film_.filter().radius());
         if (settings.strategy_images_max_k > 0)
             strategies_ = std::make_unique<StrategyImages>(film_.crop(), settings.strategy_images_max_k,
@@ -152,6 +163,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                                     if (aovs)
                                         for (size_t a = 0; a < aovs->size(); ++a)
                                             aovs->add_camera(a, index(x, y), scratch.aov_camera[a]);
+                                    if (breakdown_) breakdown_->add_splatting_sample(x, y, scratch, local, filter);
                                     out.insert(out.end(), local.begin(), local.end());
                                     if (per)
                                         for (const auto& c : *per) {
@@ -211,6 +223,8 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
     const Sensor& sensor = scene_.sensor();
     std::optional<CameraLpeTracker> lpe;
     if (aovs_) lpe.emplace(aovs_->lpes());
+    std::optional<PathClassTracker> classes;
+    if (breakdown_) classes.emplace(breakdown_->max_length());
     const uint64_t width = uint64_t(sensor.width);
     for (int y = tile.y0; y < tile.y1; ++y) {
         for (int x = tile.x0; x < tile.x1; ++x) {
@@ -224,7 +238,8 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
                 Vec2 pos = film_.sample_position(x, y, u_film);
                 Ray ray = sensor.generate_ray(pos, u_lens);
                 if (lpe) lpe->reset();
-                Rgb L = tracer_.radiance(ray, sampler, stats, lpe ? &*lpe : nullptr);
+                if (classes) classes->reset();
+                Rgb L = tracer_.radiance(ray, sampler, stats, lpe ? &*lpe : nullptr, classes ? &*classes : nullptr);
                 ++stats.samples;
                 if (!is_finite(L)) {
                     ++stats.nonfinite;  // discarded: one bad sample must not poison a pixel
@@ -232,6 +247,7 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
                 }
                 film_.add_sample(x, y, L);
                 if (lpe) aovs_->add_samples(x, y, *lpe);
+                if (classes) breakdown_->add_path_sample(x, y, *classes);
             }
         }
     }
@@ -251,8 +267,8 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
     // The time limit counts from the origin the caller gave (omega render: its own start).
     const auto origin = settings_.time_origin.value_or(t_start);
     auto budget_used = [&] { return std::chrono::duration<double>(now() - origin).count(); };
-    // Strategy images are a diagnostic of whole batches: their passes are never cut.
-    const bool may_cut = halt.time_s && !strategies_;
+    // Strategy images and the breakdown are diagnostics of whole batches: their passes are never cut.
+    const bool may_cut = halt.time_s && !strategies_ && !breakdown_;
 
     PassReport report;
     report.spp = settings_.first_sample;

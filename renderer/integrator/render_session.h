@@ -17,6 +17,7 @@
 #include "film/film.h"
 #include "integrator/aov_images.h"
 #include "integrator/bdpt_tracer.h"
+#include "integrator/breakdown_collector.h"
 #include "integrator/path_tracer.h"
 #include "integrator/splat_bands.h"
 #include "integrator/strategy_images.h"
@@ -32,6 +33,10 @@ struct RenderSettings {
     long long first_sample = 0;  // resume: sample indices below this are already in the film
     IntegratorDesc integrator;
     int strategy_images_max_k = 0;  // > 0: record per-(s,t) images up to this path length (light, bdpt)
+    // The measurement-contribution breakdown by path class (integrator/breakdown.h); none: off,
+    // and the render runs exactly the code it runs without it. Its passes are never cut at a
+    // time limit (a cut pass would weigh some pixels' samples more than others').
+    std::optional<BreakdownDesc> breakdown;
     // When halt.time_s starts counting (default: when run() starts). `omega render` passes its own
     // start, so that loading the scene is inside the budget the user gave.
     std::optional<std::chrono::steady_clock::time_point> time_origin;
@@ -91,6 +96,11 @@ public:
     const AovImages* aovs() const { return aovs_.get(); }
     AovImages* aovs() { return aovs_.get(); }
 
+    // The breakdown of the samples rendered by this session (settings().breakdown), null when
+    // off. Read between passes, like film().
+    const BreakdownCollector* breakdown() const { return breakdown_.get(); }
+    BreakdownCollector* breakdown() { return breakdown_.get(); }
+
 private:
     void render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats);
     // Any thread: whether a tile may still start in this pass (false once the pass is cut).
@@ -108,6 +118,7 @@ private:
     std::unique_ptr<BdptTracer> bdpt_;
     std::unique_ptr<StrategyImages> strategies_;
     std::unique_ptr<AovImages> aovs_;
+    std::unique_ptr<BreakdownCollector> breakdown_;
     tbb::enumerable_thread_specific<std::vector<StrategyContribution>> sample_strategies_;
     Film film_;
     tbb::enumerable_thread_specific<TracerStats> stats_;  // cache-aligned per thread

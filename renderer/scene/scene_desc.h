@@ -69,6 +69,13 @@ struct FilmDesc {
     // Light path expression outputs (film key `aov`, `omega render --aov`), in file order; each
     // is an image of its own (pathspace/lpe.h, integrator/aov_images.h).
     std::vector<AovDesc> aovs;
+    // The measurement-contribution breakdown (film key `breakdown`, `omega render --breakdown`;
+    // integrator/breakdown.h): classes up to `length` edges, over the crop or a pixel box.
+    struct Breakdown {
+        int length = 6;
+        std::optional<std::array<int, 4>> box;  // [x0, y0, x1, y1)
+    };
+    std::optional<Breakdown> breakdown;
 };
 
 // When a render stops: whichever given condition is met first. None given = 64 spp.

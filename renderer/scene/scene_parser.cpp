@@ -515,6 +515,22 @@ void parse_film(ParamBag b, FilmDesc& f) {
         f.crop = {0, 0, f.width, f.height};
     }
     if (auto v = b.get("aov")) parse_aovs(*v, f.aovs);
+    if (auto v = b.get("breakdown")) {
+        // breakdown: {length: N, box: [x0, y0, x1, y1]}; the box is checked against the crop by
+        // the renderer, which knows it.
+        ParamBag bb = v->as_bag();
+        FilmDesc::Breakdown bd;
+        bd.length = bb.get_int("length", bd.length, 1, 16);
+        if (auto bv = bb.get("box")) {
+            if (!bv->is_list() || bv->node().size() != 4) bv->fail("expected [x0, y0, x1, y1], got " + bv->describe());
+            auto items = bv->as_list();
+            std::array<int, 4> box{};
+            for (int i = 0; i < 4; ++i) box[size_t(i)] = int(items[size_t(i)].as_int(0, 1 << 16));
+            bd.box = box;
+        }
+        bb.check_unused();
+        f.breakdown = bd;
+    }
     b.check_unused();
 }
 

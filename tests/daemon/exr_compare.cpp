@@ -5,6 +5,8 @@
 // results whose algebra is exact only to rounding (a merge of partial renders).
 // --layer NAME (repeatable, before the files): also compare the float layer NAME.R/G/B (e.g.
 // aov.direct, aov.direct.var) the same way; a missing layer is a read error.
+// --attr NAME (repeatable, before the files): also require the string attribute NAME (e.g.
+// omega.breakdown) to be present in both and equal.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -45,6 +47,12 @@ int main(int argc, char** argv) {
     argv += 2;
     argc -= 2;
   }
+  std::vector<std::string> attrs;
+  while (argc >= 5 && std::string(argv[1]) == "--attr") {
+    attrs.push_back(argv[2]);
+    argv += 2;
+    argc -= 2;
+  }
   if (argc != 3) {
     std::fprintf(stderr, "usage: omega_exr_compare [--rel-tol E] FULL.exr PART.exr\n");
     return 2;
@@ -61,6 +69,14 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "omega_exr_compare: %s\n", e.what());
     return 2;
+  }
+  for (const std::string& name : attrs) {
+    auto ia = a.attributes.find(name), ib = b.attributes.find(name);
+    if (ia == a.attributes.end() || ib == b.attributes.end() || ia->second != ib->second) {
+      std::fprintf(stderr, "attribute %s: %s\n", name.c_str(),
+                   ia == a.attributes.end() || ib == b.attributes.end() ? "missing" : "differs");
+      return 1;
+    }
   }
   if (b.x0 < a.x0 || b.y0 < a.y0 || b.x0 + b.width > a.x0 + a.width || b.y0 + b.height > a.y0 + a.height) {
     std::fprintf(stderr, "data window of %s is not inside that of %s\n", argv[2], argv[1]);

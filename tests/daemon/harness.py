@@ -123,8 +123,8 @@ def local_render(scene_bytes, out, spp, seed=0, workdir=None, integrator=None):
                    check=True, timeout=120, stdout=subprocess.DEVNULL)
 
 
-def exr_equal(full, part, layers=()):
-    extra = [a for l in layers for a in ("--layer", l)]
+def exr_equal(full, part, layers=(), attrs=()):
+    extra = [a for l in layers for a in ("--layer", l)] + [a for n in attrs for a in ("--attr", n)]
     r = subprocess.run([EXR_COMPARE] + extra + [full, part], capture_output=True, text=True, timeout=60)
     if r.returncode != 0:
         sys.stderr.write(r.stderr)

@@ -27,20 +27,23 @@ def test_kill9_and_resume(tmp, daemons):
 
 def test_kill9_and_resume_aovs(tmp, daemons):
     # Light path expression outputs are in the checkpoint too: after the kill their layers resume
-    # bit-identically with the beauty. Under a sanitizer bdpt renders the smaller film and fewer
+    # bit-identically with the beauty; so are the breakdown's exact sums (film key `breakdown`),
+    # whose report then equals the uninterrupted render's text for text. Under a sanitizer bdpt renders the smaller film and fewer
     # samples, as in test_kill9_and_resume (at full size TSan ran past the test's 240 s).
     small = bool(os.environ.get("OMEGA_SANITIZER"))
     for integrator, spp, w, h_ in (("path", SPP, 64, 48), ("bdpt", 64 if small else SPP, 32 if small else 64, 24 if small else 48)):
         scene = small_cornell(width=w, height=h_).replace(b"max_depth: 65", b"max_depth: 8")
-        scene = scene.replace(b"film: {width: %d" % w, b'film: {aov: {direct: "L D E", indirect: "L D D+ E"}, width: %d' % w)
+        scene = scene.replace(b"film: {width: %d" % w,
+                              b'film: {aov: {direct: "L D E", indirect: "L D D+ E"}, breakdown: {length: 4}, width: %d' % w)
         assert b"aov:" in scene
         work = os.path.join(tmp, integrator)
         os.makedirs(work)
         kill9_and_resume(work, daemons, integrator, spp, scene,
-                         layers=("aov.direct", "aov.direct.var", "aov.indirect", "aov.indirect.var"))
+                         layers=("aov.direct", "aov.direct.var", "aov.indirect", "aov.indirect.var"),
+                         attrs=("omega.breakdown", "omega.breakdown_samples"))
 
 
-def kill9_and_resume(tmp, daemons, integrator, SPP, scene, layers=()):
+def kill9_and_resume(tmp, daemons, integrator, SPP, scene, layers=(), attrs=()):
     local = os.path.join(tmp, "local.exr")
     local_render(scene, local, SPP, 11, tmp, integrator=integrator)
     d = Daemon(tmp, config="max_running: 1\n").start()
@@ -67,7 +70,7 @@ def kill9_and_resume(tmp, daemons, integrator, SPP, scene, layers=()):
     with open(out, "wb") as fh:
         fh.write(f["_payload"])
     assert f["spp"] == SPP
-    assert exr_equal(local, out, layers), f"{integrator}: resumed render differs from the uninterrupted one"
+    assert exr_equal(local, out, layers, attrs), f"{integrator}: resumed render differs from the uninterrupted one"
     wait_state(c, queued, {"done"})
     d.stop()
     print(f"  {integrator}: killed at >= 8 spp, resumed from {resumed_from} spp, finished at {SPP} spp, bit-identical")

@@ -4,9 +4,10 @@ with a mesh asset (sent once, then cached); a subscriber that joins after the en
 tracing's tiles go out as each finishes, not when the whole pass has."""
 import hashlib
 import os
+import subprocess
 import time
 
-from harness import SLOWDOWN, Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state, watch
+from harness import OMEGA, SLOWDOWN, Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state, watch
 
 SPP, SEED = 12, 7
 TRI_OBJ = b"v -0.5 0.2 -0.5\nv 0.5 0.2 -0.5\nv 0 1.2 0\nf 1 2 3\n"
@@ -36,6 +37,19 @@ def check_job(tmp, c, job, local, label):
     return tiles
 
 
+def render_here_and_submit(tmp, daemons, scene, label):
+    """Renders `scene` locally (SPP, SEED) to local-LABEL.exr, starts a daemon and submits the
+    same scene to it. Returns the local path, the client and the `accepted` reply."""
+    local = os.path.join(tmp, f"local-{label}.exr")
+    local_render(scene, local, SPP, SEED, tmp)
+    d = Daemon(tmp).start()
+    daemons.append(d)
+    c = d.client()
+    a = c.submit(scene, name=f"cornell-{label}", seed=SEED, halt_=op.halt(spp=SPP))
+    assert a["type"] == "accepted", a
+    return local, c, a
+
+
 def test_stream_and_fetch_equal_local_render(tmp, daemons):
     scene = small_cornell()
     local = os.path.join(tmp, "local.exr")
@@ -63,13 +77,7 @@ def test_aovs_in_tiles_and_fetch(tmp, daemons):
     scene = small_cornell().replace(b"film: {width: 80", b'film: {aov: {direct: "L D E", indirect: "L D D+ E"}, width: 80')
     assert b"aov:" in scene
     layers = ("aov.direct", "aov.direct.var", "aov.indirect", "aov.indirect.var")
-    local = os.path.join(tmp, "local-aov.exr")
-    local_render(scene, local, SPP, SEED, tmp)
-    d = Daemon(tmp).start()
-    daemons.append(d)
-    c = d.client()
-    a = c.submit(scene, name="cornell-aov", seed=SEED, halt_=op.halt(spp=SPP))
-    assert a["type"] == "accepted", a
+    local, c, a = render_here_and_submit(tmp, daemons, scene, "aov")
     tiles, progress, done = watch(c, a["job"])
     assert done["state"] == "done", done
     for (rect, (h, payload)) in tiles.items():
@@ -80,6 +88,36 @@ def test_aovs_in_tiles_and_fetch(tmp, daemons):
     p = os.path.join(tmp, "aov-fetched.exr")
     write(p, fetched["_payload"])
     assert exr_equal(local, p, layers), "fetched image differs from the local render"
+    c.close()
+
+
+def test_breakdown_in_fetch_and_result(tmp, daemons):
+    """A scene whose film asks for the path-class breakdown (film key `breakdown`, the job
+    option): the fetched image's omega.breakdown header equals a local render's, text for text
+    (its sums are exact, so the daemon's threads and passes cannot change a digit)."""
+    scene = small_cornell().replace(b"film: {width: 80", b"film: {breakdown: {length: 4}, width: 80")
+    assert b"breakdown:" in scene
+    local, c, a = render_here_and_submit(tmp, daemons, scene, "breakdown")
+    d = daemons[-1]
+    wait_state(c, a["job"], {"done"})
+    fetched = c.job("fetch", a["job"])
+    p = os.path.join(tmp, "breakdown-fetched.exr")
+    write(p, fetched["_payload"])
+    assert exr_equal(local, p, attrs=("omega.breakdown",)), "fetched breakdown differs from the local render's"
+    # `omega submit --breakdown` sets the same key in a scene that lacks it.
+    plain = os.path.join(tmp, "plain.yaml")
+    write(plain, small_cornell())
+    r = subprocess.run([OMEGA, "submit", plain, "--host", d.unix, "--spp", str(SPP), "--seed", str(SEED), "-q",
+                        "--breakdown", "--breakdown-length", "4"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    job = int(r.stdout.strip())
+    wait_state(c, job, {"done"})
+    p2 = os.path.join(tmp, "breakdown-submitted.exr")
+    write(p2, c.job("fetch", job)["_payload"])
+    assert exr_equal(local, p2, attrs=("omega.breakdown",)), "omega submit --breakdown differs from the local render's"
+    bad = subprocess.run([OMEGA, "submit", plain, "--host", d.unix, "--breakdown-box", "1,2"], capture_output=True,
+                         text=True, timeout=120)
+    assert bad.returncode == 2 and "breakdown box" in bad.stderr, bad.stderr
     c.close()
 
 
@@ -167,5 +205,6 @@ if __name__ == "__main__":
     t.run(test_tiles_stream_before_their_pass_ends)
     t.run(test_stream_and_fetch_equal_local_render)
     t.run(test_aovs_in_tiles_and_fetch)
+    t.run(test_breakdown_in_fetch_and_result)
     t.run(test_mesh_asset_cached_and_late_subscriber)
     t.exit()

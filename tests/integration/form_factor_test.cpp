@@ -89,3 +89,42 @@ TEST(FormFactor, FlipNormalsTurnsTheEmitterAround) {
 
 }  // namespace
 }  // namespace omega
+
+namespace omega {
+namespace {
+
+// The breakdown's `L D E` (App. 8.A) is exactly the direct part: with unbounded depth it matches
+// the closed form rho Le F of the whole image and of a pixel box, and carries all of it (nothing
+// else reaches the camera: the floor cannot see itself).
+TEST(FormFactor, BreakdownDirectClassIsTheClosedForm) {
+    FfSetup s;
+    s.res = 12;
+    SceneDesc d = make_scene(s, FilterType::Box);
+    d.integrator.max_depth = -1;
+    const Rect box{2, 3, 7, 9};
+    for (IntegratorType type : {IntegratorType::Path, IntegratorType::Bdpt}) {
+        d.integrator.type = type;
+        for (bool use_box : {false, true}) {
+            BreakdownDesc bd;
+            if (use_box) bd.box = box;
+            const Rect region = use_box ? box : Rect{0, 0, s.res, s.res};
+            double expected = 0;
+            for (int y = region.y0; y < region.y1; ++y)
+                for (int x = region.x0; x < region.x1; ++x) expected += expected_pixel(s, x, y);
+            expected /= double(region.area());
+            auto r = test::render_breakdown(d, 256, bd, 21, 2);
+            const BreakdownReport rep = test::breakdown(r);
+            const BreakdownRow* lde = test::breakdown_row(rep, "class", "L D E");
+            ASSERT_NE(lde, nullptr);
+            EXPECT_LT(std::abs(lde->mu - expected) / lde->mu_stderr, test::z_threshold(4))
+                << integrator_name(type) << " box " << use_box << " mu " << lde->mu << " +- " << lde->mu_stderr
+                << " expected " << expected;
+            EXPECT_NEAR(lde->fraction, 1.0, 1e-12);
+            // The test can fail: 5% off is rejected.
+            EXPECT_GT(std::abs(lde->mu - 1.05 * expected) / lde->mu_stderr, test::z_threshold(1));
+        }
+    }
+}
+
+}  // namespace
+}  // namespace omega

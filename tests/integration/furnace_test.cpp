@@ -1,6 +1,8 @@
 // Analytic scenes with closed-form answers, checked by z-tests on the estimated standard error.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 
 #include "render_harness.h"
@@ -102,6 +104,54 @@ TEST(PointLightInSphere, MatchesClosedForm) {
                                             << " expected " << first * series;
         EXPECT_EQ(r.report.nonfinite, 0u);
     }
+}
+
+}  // namespace
+}  // namespace omega
+
+namespace omega {
+namespace {
+
+// The breakdown by length (App. 8.A): in the furnace, the paths of k edges carry
+// le rho^(k-1) of the measurement le / (1 - rho), the fraction (1 - rho) rho^(k-1), and the
+// paths longer than the breakdown's length the rest, rho^max. One z-test per length (Bonferroni).
+// With expected_rho != rho the expectation is wrong, and must be rejected.
+int furnace_length_failures(IntegratorType type, double rho, double expected_rho, long long spp, uint64_t seed) {
+    SceneDesc d = furnace(float(rho), 1.f, -1);
+    d.sensor.film.width = d.sensor.film.height = 8;
+    d.integrator.type = type;
+    BreakdownDesc bd;
+    bd.max_length = 5;
+    auto r = test::render_breakdown(d, spp, bd, seed, 2);
+    const BreakdownReport rep = test::breakdown(r);
+    int failures = 0;
+    const double bound = test::z_threshold(bd.max_length + 1);
+    for (int k = 1; k <= bd.max_length + 1; ++k) {
+        const bool longer = k > bd.max_length;
+        const double expected =
+            longer ? std::pow(expected_rho, bd.max_length) : (1 - expected_rho) * std::pow(expected_rho, k - 1);
+        const BreakdownRow* row = test::breakdown_row(rep, "length", longer ? "longer" : fmt::format("k={}", k));
+        if (!row) {
+            ++failures;
+            continue;
+        }
+        const double z = (row->fraction - expected) / std::max(row->fraction_stderr, 1e-300);
+        if (std::abs(z) > bound) ++failures;
+        if (expected_rho == rho) {
+            EXPECT_LT(std::abs(z), bound) << integrator_name(type) << " k " << k << " fraction " << row->fraction
+                                          << " +- " << row->fraction_stderr << " expected " << expected;
+        }
+    }
+    return failures;
+}
+
+TEST(FurnaceBreakdown, LengthFractionsAreGeometric) {
+    for (IntegratorType type : {IntegratorType::Path, IntegratorType::Bdpt, IntegratorType::Light})
+        EXPECT_EQ(furnace_length_failures(type, 0.6, 0.6, 64, 11), 0) << integrator_name(type);
+}
+
+TEST(FurnaceBreakdown, DetectsAWrongAlbedo) {
+    EXPECT_GT(furnace_length_failures(IntegratorType::Path, 0.6, 0.64, 64, 12), 0);
 }
 
 }  // namespace

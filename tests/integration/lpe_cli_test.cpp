@@ -10,46 +10,19 @@
 
 #include "film/film.h"
 #include "run_omega.h"
+#include "scene_dir_fixture.h"
 
 namespace fs = std::filesystem;
 
 namespace omega {
 namespace {
 
-// A diffuse sphere and a mirror lit by a point light: direct, indirect and mirror paths.
-const char* kScene = R"(omega: 1
-integrator: {type: path, max_depth: 4}
-sensor:
-  type: perspective
-  fov: 50
-  to_world: {look_at: {origin: [0, 0, -3], target: [0, 0, 0], up: [0, 1, 0]}}
-  film: {width: 16, height: 12, aov: {direct: "L D E"}}
-materials:
-  white: {type: diffuse, reflectance: [0.5, 0.5, 0.5]}
-  mirror: {type: conductor}
-shapes:
-  - {type: sphere, center: [0, 0, 0], radius: 0.7, material: white}
-  - {type: rectangle, to_world: [{scale: 3}, {translate: [0, 0, 1.5]}], material: mirror}
-lights:
-  - {type: point, position: [0, 2, -2], intensity: [5, 5, 5]}
-)";
-
 // The rest of the partition `direct` starts.
 const std::string kAovArgs = " --aov 'indirect=L D D+ E' --aov 'specular=L .* S .* E' --aov 'emitted=L E'";
 
-class LpeCli : public ::testing::Test {
+class LpeCli : public test::SceneDirTest {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() / fs::path("omega_lpe_cli_" + std::to_string(::getpid()) + "_" +
-                                                    ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir_);
-        scene_ = (dir_ / "scene.yaml").string();
-        std::ofstream(scene_) << kScene;
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-    fs::path dir_;
-    std::string scene_;
+    LpeCli() : SceneDirTest("omega_lpe_cli_", test::kMirrorSphereScene) {}
 };
 
 TEST_F(LpeCli, LayersPartitionTheBeauty) {

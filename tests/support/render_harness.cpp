@@ -5,7 +5,10 @@
 
 namespace omega::test {
 
-RenderResult render(const SceneDesc& desc, long long spp, uint64_t seed, int threads, int tile_size) {
+namespace {
+
+RenderResult render_with(const SceneDesc& desc, long long spp, uint64_t seed, int threads, int tile_size,
+                         const std::optional<BreakdownDesc>& bd) {
     RenderResult r;
     r.scene = Scene::build(desc);
     RenderSettings rs;
@@ -14,9 +17,29 @@ RenderResult render(const SceneDesc& desc, long long spp, uint64_t seed, int thr
     rs.threads = threads;
     rs.tile_size = tile_size;
     rs.integrator = desc.integrator;
+    rs.breakdown = bd;
     r.session = std::make_unique<RenderSession>(*r.scene, rs);
     r.report = r.session->run();
     return r;
+}
+
+}  // namespace
+
+RenderResult render(const SceneDesc& desc, long long spp, uint64_t seed, int threads, int tile_size) {
+    return render_with(desc, spp, seed, threads, tile_size, std::nullopt);
+}
+
+RenderResult render_breakdown(const SceneDesc& desc, long long spp, const BreakdownDesc& bd, uint64_t seed, int threads,
+                              int tile_size) {
+    return render_with(desc, spp, seed, threads, tile_size, bd);
+}
+
+BreakdownReport breakdown(const RenderResult& r) { return r.session->breakdown()->report(); }
+
+const BreakdownRow* breakdown_row(const BreakdownReport& r, const std::string& kind, const std::string& name) {
+    for (const auto& row : r.rows)
+        if (row.kind == kind && row.name == name) return &row;
+    return nullptr;
 }
 
 SceneDesc glass_caustic_scene(double lamp_radius, float lamp_radiance) {

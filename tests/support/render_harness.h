@@ -20,6 +20,13 @@ struct RenderResult {
 };
 
 RenderResult render(const SceneDesc& desc, long long spp, uint64_t seed = 0, int threads = 0, int tile_size = 32);
+// The same with the path-class breakdown on (integrator/breakdown.h); its report is breakdown().
+RenderResult render_breakdown(const SceneDesc& desc, long long spp, const BreakdownDesc& bd, uint64_t seed = 0,
+                              int threads = 0, int tile_size = 32);
+// The breakdown report of a render_breakdown result.
+BreakdownReport breakdown(const RenderResult& r);
+// One breakdown row by kind and name ("class", "L D E"; "length", "k=2"); null if absent.
+const BreakdownRow* breakdown_row(const BreakdownReport& r, const std::string& kind, const std::string& name);
 
 // A minimal valid scene: a perspective camera at the origin looking along +z, film w x h, box filter.
 SceneDesc empty_scene(int w, int h);
