@@ -8,6 +8,7 @@
 #include "film/film.h"
 #include "film/film_chi2_test_util.h"
 #include "sampling/rng.h"
+#include "sensor/sensor.h"
 
 namespace omega {
 namespace {
@@ -145,6 +146,33 @@ TEST(Filter, SamplePositionIsPixelCentrePlusOffset) {
     const Vec2 c = film.sample_position(0, 0, {0.5f, 0.5f});
     EXPECT_NEAR(c.x, 0.5f, 1e-6f);
     EXPECT_NEAR(c.y, 0.5f, 1e-6f);
+}
+
+// The sensor's crop coverage (light tracing's W_e) takes 1 inside the crop only for filters
+// whose weights at the pixel centres sum to 1; elsewhere it sums them as before.
+TEST(Filter, CropCoverageShortcutOnlyWhereTheWeightsSumToOne) {
+    EXPECT_TRUE(filter_sums_to_one(Filter(FilterType::Box, 0.5f)));
+    EXPECT_TRUE(filter_sums_to_one(Filter(FilterType::Tent, 1.f)));
+    EXPECT_TRUE(filter_sums_to_one(Filter(FilterType::Tent, 2.f)));
+    EXPECT_FALSE(filter_sums_to_one(Filter(FilterType::Tent, 1.5f)));
+    EXPECT_FALSE(filter_sums_to_one(Filter(FilterType::Gaussian, 1.5f, 0.5f)));
+    for (FilterType type : {FilterType::Tent, FilterType::Gaussian}) {
+        SensorDesc sd;
+        sd.film.width = 40;
+        sd.film.height = 30;
+        sd.film.filter = type;
+        sd.film.filter_radius = type == FilterType::Tent ? 1.f : 1.5f;
+        const Sensor sensor = Sensor::from_desc(sd);
+        EXPECT_EQ(sensor.coverage_one_inside, type == FilterType::Tent);
+        Rng rng(3, 4);
+        for (int i = 0; i < 2000; ++i) {
+            const Vec2 p{-2.f + 44.f * rng.next_1d(), -2.f + 34.f * rng.next_1d()};
+            double sum = 0;  // the definition: weights of the crop pixels around p
+            for (int y = 0; y < 30; ++y)
+                for (int x = 0; x < 40; ++x) sum += sensor.pixel_filter.pdf(p.x - (x + 0.5), p.y - (y + 0.5));
+            ASSERT_NEAR(sensor.crop_coverage(p), sum, 1e-12) << p.x << ", " << p.y;
+        }
+    }
 }
 
 TEST(Chi2Util, GammaQMatchesKnownValues) {

@@ -43,6 +43,7 @@ Sensor Sensor::from_desc(const SensorDesc& d) {
     s.crop_pixels = double(s.crop.x1 - s.crop.x0) * double(s.crop.y1 - s.crop.y0);
     s.pixel_filter = Filter(f.filter, f.filter_radius, f.gaussian_stddev);
     s.filter_radius = f.filter_radius;
+    s.coverage_one_inside = filter_sums_to_one(s.pixel_filter);
     if (d.type == SensorType::Orthographic) {
         // World extent of the plane: to_world's x and y axis lengths scale the local [-1,1] x [-1/aspect, 1/aspect].
         double sx = length(d.to_world.vector({1, 0, 0})), sy = length(d.to_world.vector({0, 1, 0}));

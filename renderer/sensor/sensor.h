@@ -27,6 +27,9 @@ struct OrthographicSensor {
     float half_x = 1, half_y = 1;  // local extent before to_world
 };
 
+// Whether a filter's weights at the pixel centres around any point sum to 1 within 1e-12.
+bool filter_sums_to_one(const Filter& f);
+
 struct Sensor {
     std::variant<PerspectiveSensor, ThinLensSensor, OrthographicSensor> model;
     Transform to_world;
@@ -42,6 +45,10 @@ struct Sensor {
     // connection and every MIS table; building a Gaussian per call costs an erf).
     Filter pixel_filter{FilterType::Box, 0.5f};
     float filter_radius = 0.5f;
+    // The filter's weights at the pixel centres around any point sum to 1 (within 1e-12; box and
+    // tent of the usual radii, not the Gaussian), so crop_coverage is 1 wherever the footprint
+    // lies inside the crop, without summing them (it ran for every light-tracing connection).
+    bool coverage_one_inside = false;
     // Sum over crop pixels of the filter weight at film position p: the fraction of the camera's
     // sampling density (uniform over the crop) that lands at p. 1 inside, less near the border.
     double crop_coverage(Vec2 p) const;

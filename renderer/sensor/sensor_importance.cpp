@@ -23,8 +23,24 @@ Vec3 mul_point(const float* m, const Vec3& p) {
 
 }  // namespace
 
+bool filter_sums_to_one(const Filter& f) {
+    const double r = f.radius();
+    for (int i = 0; i < 64; ++i) {
+        const double x = (i + 0.5) / 64.0;  // offset from a pixel centre
+        double sum = 0;
+        for (int c = -int(std::ceil(r)) - 1; c <= int(std::ceil(r)) + 1; ++c) sum += f.pdf_1d(x - c);
+        if (std::abs(sum - 1.0) > 1e-12) return false;
+    }
+    return true;
+}
+
 double Sensor::crop_coverage(Vec2 p) const {
     const Filter& f = pixel_filter;
+    // Inside the crop by more than the footprint: every weight is a crop pixel's.
+    const double margin = double(filter_radius) + 1.0;
+    if (coverage_one_inside && p.x >= crop.x0 + margin && p.x <= crop.x1 - margin && p.y >= crop.y0 + margin &&
+        p.y <= crop.y1 - margin)
+        return 1.0;
     auto axis = [&](double x, int lo, int hi) {
         int a = std::max(lo, int(std::floor(x - filter_radius - 0.5))), b = std::min(hi - 1, int(std::ceil(x + filter_radius - 0.5)));
         double sum = 0;
