@@ -36,8 +36,10 @@ constexpr int kScale = 2;                 // each font pixel is 2 x 2 image pixe
 constexpr int kAdvance = 6 * kScale;      // glyph width plus one column of space
 constexpr int kTextHeight = 7 * kScale;
 
+// One thread (nthreads = 1): the chart is a few hundred pixels, and OIIO's own pool is a library
+// TSan cannot see into (its hand-offs read as races in the TSan build).
 void fill(OIIO::ImageBuf& img, int x0, int y0, int x1, int y1, const std::array<float, 3>& c) {
-    OIIO::ImageBufAlgo::fill(img, {c[0], c[1], c[2]}, OIIO::ROI(x0, x1, y0, y1, 0, 1, 0, 3));
+    OIIO::ImageBufAlgo::fill(img, {c[0], c[1], c[2]}, OIIO::ROI(x0, x1, y0, y1, 0, 1, 0, 3), 1);
 }
 
 // Draws `text` with its top-left corner at (x, y); glyphs the font lacks are left blank.
@@ -100,6 +102,7 @@ void write_breakdown_chart(const BreakdownReport& r, const std::string& path) {
     const int width = legend_x + legend_w;
     const int height = std::max(top + plot_h + bottom, top + int(legend.size()) * (kTextHeight + 6) + 10);
     OIIO::ImageBuf img(OIIO::ImageSpec(width, height, 3, OIIO::TypeDesc::FLOAT));
+    img.threads(1);  // the write's conversion too
     fill(img, 0, 0, width, height, {1.f, 1.f, 1.f});
 
     // The y axis runs to the largest length's fraction, rounded up to a multiple of 10%.

@@ -59,21 +59,6 @@ void Film::add_sample(int x, int y, const Rgb& value) { add_weighted(x, y, Vec3d
 
 void Film::add_weighted(int x, int y, const Vec3d& value, double weight) { add_weighted_at(index(x, y), value, weight); }
 
-void Film::add_weighted_at(size_t i, const Vec3d& value, double weight) {
-    Accum& a = px_[i];
-    // Weighted Welford (West 1979): stable where sum/sum-of-squares cancels catastrophically
-    // (bright, low-variance pixels). With unit weights it is the classic update.
-    a.n += 1;
-    a.w += weight;
-    const double f = weight / a.w;
-    for (int c = 0; c < 3; ++c) {
-        const double v = value[c];
-        const double delta = v - a.mean[c];
-        a.mean[c] += delta * f;
-        a.m2[c] += weight * delta * (v - a.mean[c]);
-    }
-}
-
 PixelStats Film::pixel(int x, int y) const {
     const Accum& a = px_[index(x, y)];
     PixelStats s;

@@ -87,7 +87,21 @@ public:
     // for callers that add to several films at one pixel (AOVs) and checked it once.
     size_t pixel_index(int x, int y) const { return index(x, y); }
     void add_sample_at(size_t i, const Rgb& value) { add_weighted_at(i, Vec3d(value), 1.0); }
-    void add_weighted_at(size_t i, const Vec3d& value, double weight);
+    // Inline: the splatting integrators' batch loop calls it per pixel for the beauty and every AOV.
+    void add_weighted_at(size_t i, const Vec3d& value, double weight) {
+        Accum& a = px_[i];
+        // Weighted Welford (West 1979): stable where sum/sum-of-squares cancels catastrophically
+        // (bright, low-variance pixels). With unit weights it is the classic update.
+        a.n += 1;
+        a.w += weight;
+        const double f = weight / a.w;
+        for (int c = 0; c < 3; ++c) {
+            const double v = value[c];
+            const double delta = v - a.mean[c];
+            a.mean[c] += delta * f;
+            a.m2[c] += weight * delta * (v - a.mean[c]);
+        }
+    }
     PixelStats pixel(int x, int y) const;
     // Pixels with fewer than 2 samples have no variance estimate; while any exists in the crop,
     // mean_rel_error and image_mean_stderr are +inf so that a target-error halt cannot fire.

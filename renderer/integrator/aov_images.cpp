@@ -19,12 +19,11 @@ void AovImages::begin_batch() {
 }
 
 void AovImages::add_batch(size_t pixel, const double* rescale) {
-    const size_t base = pixel * films_.size();
-    for (size_t a = 0; a < films_.size(); ++a) {
+    const size_t n = films_.size(), base = pixel * n;
+    for (size_t a = 0; a < n; ++a) {
         Vec3d& c = camera_[base + a];
         Vec3d& sp = splats_[base + a];
-        const Vec3d v = rescale ? c + sp * *rescale : c + sp;
-        films_[a].film.add_weighted_at(pixel, v, 1.0);
+        films_[a].film.add_weighted_at(pixel, rescale ? c + sp * *rescale : c + sp, 1.0);
         c = sp = Vec3d(0.0);
     }
 }

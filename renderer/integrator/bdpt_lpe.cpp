@@ -10,10 +10,15 @@ void BdptLpeMatcher::prepare(const LpeSet& set, const std::vector<PathVertex>& l
     n_ = set.size();
     n_light_ = n_light;
     n_camera_ = n_camera;
-    light_walk_.resize(size_t(n_light));
-    light_joined_.resize(size_t(n_light));
-    camera_walk_.resize(size_t(n_camera));
-    camera_joined_.resize(size_t(n_camera));
+    // Grown, never shrunk: only the first n_light / n_camera entries are read, and this runs per
+    // sample (six resizes were a third of its cost).
+    auto fit = [](auto& v, int n) {
+        if (v.size() < size_t(n)) v.resize(size_t(n));
+    };
+    fit(light_walk_, n_light);
+    fit(light_joined_, n_light);
+    fit(camera_walk_, n_camera);
+    fit(camera_joined_, n_camera);
     // One BSDF query per vertex: its non-delta class serves as joined and, unless the walk took
     // a delta lobe there, as walked.
     // Without G in any expression, D and G behave alike: no BSDF query at all.
@@ -26,8 +31,6 @@ void BdptLpeMatcher::prepare(const LpeSet& set, const std::vector<PathVertex>& l
     for (int i = 1; i < n_light; ++i) classify(light[size_t(i)], light_walk_[size_t(i)], light_joined_[size_t(i)]);
     if (n_camera > 0) camera_walk_[0] = camera_joined_[0] = VertexClass::E;
     for (int j = 1; j < n_camera; ++j) classify(camera[size_t(j)], camera_walk_[size_t(j)], camera_joined_[size_t(j)]);
-    fwd_.resize(n_ * size_t(n_light));
-    rev_.resize(n_ * size_t(n_camera));
     // Raw pointers: stores through uint8_t alias everything, so members would be reloaded per step.
     const VertexClass* lw = light_walk_.data();
     const VertexClass* cw = camera_walk_.data();
@@ -37,14 +40,16 @@ void BdptLpeMatcher::prepare(const LpeSet& set, const std::vector<PathVertex>& l
         const LpeProduct& rp = set.reverse_product();
         p_after_l_ = fp.step(fp.start, VertexClass::L);
         p_after_e_ = rp.step(rp.start, VertexClass::E);
-        pfwd_.resize(size_t(n_light));
-        prev_.resize(size_t(n_camera));
+        fit(pfwd_, n_light);
+        fit(prev_, n_camera);
         uint16_t q = fp.start;
         for (int i = 0; i < n_light; ++i) pfwd_[size_t(i)] = q = fp.step(q, lw[i]);
         q = rp.start;
         for (int j = 0; j < n_camera; ++j) prev_[size_t(j)] = q = rp.step(q, cw[j]);
         return;
     }
+    fit(fwd_, int(n_) * n_light);
+    fit(rev_, int(n_) * n_camera);
     for (size_t a = 0; a < n_; ++a) {
         const Lpe& e = set[a];
         after_l_[a] = e.forward.step(e.forward.start, VertexClass::L);
@@ -60,16 +65,7 @@ void BdptLpeMatcher::prepare(const LpeSet& set, const std::vector<PathVertex>& l
     }
 }
 
-uint32_t BdptLpeMatcher::match(int s, int t, bool via_mirror) const {
-    if (product_) {
-        const LpeProduct& fp = set_->forward_product();
-        const LpeProduct& rp = set_->reverse_product();
-        uint16_t f = s == 0 ? fp.start : s == 1 ? p_after_l_ : fp.step(pfwd_[size_t(s - 2)], light_joined_[size_t(s - 1)]);
-        if (via_mirror) f = fp.step(f, VertexClass::S);
-        const uint16_t r =
-            t == 1 ? p_after_e_ : rp.step(prev_[size_t(t - 2)], s == 0 ? VertexClass::L : camera_joined_[size_t(t - 1)]);
-        return set_->join(f, r);
-    }
+uint32_t BdptLpeMatcher::match_each(int s, int t, bool via_mirror) const {
     uint32_t mask = 0;
     for (size_t a = 0; a < n_; ++a) {
         const Lpe& e = (*set_)[a];

@@ -26,11 +26,23 @@ public:
                  const std::vector<PathVertex>& camera, int n_camera);
     // Bit i: AOV i matches strategy (s, t >= 1)'s full path; with via_mirror, the planar-mirror
     // connector's (pathspace/mirror_connector.h): a delta reflection (S) between the two sides.
-    uint32_t match(int s, int t, bool via_mirror = false) const;
+    // Inline for the product automata (the usual case): it runs once per connection.
+    uint32_t match(int s, int t, bool via_mirror = false) const {
+        if (!product_) return match_each(s, t, via_mirror);
+        const LpeProduct& fp = set_->forward_product();
+        const LpeProduct& rp = set_->reverse_product();
+        uint16_t f = s == 0 ? fp.start : s == 1 ? p_after_l_ : fp.step(pfwd_[size_t(s - 2)], light_joined_[size_t(s - 1)]);
+        if (via_mirror) f = fp.step(f, VertexClass::S);
+        const uint16_t r =
+            t == 1 ? p_after_e_ : rp.step(prev_[size_t(t - 2)], s == 0 ? VertexClass::L : camera_joined_[size_t(t - 1)]);
+        return set_->join(f, r);
+    }
     // Strategy t = 0: the light walk's first s vertices, then the lens.
     uint32_t match_lens(int s) const;
 
 private:
+    uint32_t match_each(int s, int t, bool via_mirror) const;  // each AOV's own automaton
+
     const LpeSet* set_ = nullptr;
     size_t n_ = 0;  // AOVs
     int n_light_ = 0, n_camera_ = 0;
