@@ -1,13 +1,13 @@
 #include "breakdown_chart.h"
 
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 #include <stdexcept>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -36,14 +36,26 @@ constexpr int kScale = 2;                 // each font pixel is 2 x 2 image pixe
 constexpr int kAdvance = 6 * kScale;      // glyph width plus one column of space
 constexpr int kTextHeight = 7 * kScale;
 
-// One thread (nthreads = 1): the chart is a few hundred pixels, and OIIO's own pool is a library
-// TSan cannot see into (its hand-offs read as races in the TSan build).
-void fill(OIIO::ImageBuf& img, int x0, int y0, int x1, int y1, const std::array<float, 3>& c) {
-    OIIO::ImageBufAlgo::fill(img, {c[0], c[1], c[2]}, OIIO::ROI(x0, x1, y0, y1, 0, 1, 0, 3), 1);
+// An 8-bit RGB canvas filled here and written by ImageOutput on the calling thread: an ImageBuf
+// fills and converts through OIIO's thread pool, a library TSan cannot see into (its hand-offs
+// read as races in the TSan build), for a chart of a few hundred pixels.
+struct Canvas {
+    int width, height;
+    std::vector<uint8_t> rgb;
+    Canvas(int w, int h) : width(w), height(h), rgb(size_t(w) * size_t(h) * 3, 255) {}
+};
+
+void fill(Canvas& img, int x0, int y0, int x1, int y1, const std::array<float, 3>& c) {
+    x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, img.width), y1 = std::min(y1, img.height);
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+            for (int k = 0; k < 3; ++k)
+                img.rgb[(size_t(y) * size_t(img.width) + size_t(x)) * 3 + size_t(k)] =
+                    uint8_t(std::lround(std::clamp(c[size_t(k)], 0.f, 1.f) * 255.f));
 }
 
 // Draws `text` with its top-left corner at (x, y); glyphs the font lacks are left blank.
-void draw_text(OIIO::ImageBuf& img, int x, int y, const std::string& text) {
+void draw_text(Canvas& img, int x, int y, const std::string& text) {
     const std::array<float, 3> black{0.f, 0.f, 0.f};
     for (char ch : text) {
         for (const Glyph& g : kFont) {
@@ -101,8 +113,7 @@ void write_breakdown_chart(const BreakdownReport& r, const std::string& path) {
     const int legend_w = int(longest) * kAdvance + kTextHeight + 20;
     const int width = legend_x + legend_w;
     const int height = std::max(top + plot_h + bottom, top + int(legend.size()) * (kTextHeight + 6) + 10);
-    OIIO::ImageBuf img(OIIO::ImageSpec(width, height, 3, OIIO::TypeDesc::FLOAT));
-    img.threads(1);  // the write's conversion too
+    Canvas img(width, height);
     fill(img, 0, 0, width, height, {1.f, 1.f, 1.f});
 
     // The y axis runs to the largest length's fraction, rounded up to a multiple of 10%.
@@ -140,7 +151,11 @@ void write_breakdown_chart(const BreakdownReport& r, const std::string& path) {
         draw_text(img, legend_x + kTextHeight + 8, y, text);
         y += kTextHeight + 6;
     }
-    if (!img.write(path)) throw std::runtime_error(path + ": " + img.geterror());
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) throw std::runtime_error(path + ": " + OIIO::geterror());
+    const OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, img.rgb.data()) || !out->close())
+        throw std::runtime_error(path + ": " + out->geterror());
 }
 
 }  // namespace omega
