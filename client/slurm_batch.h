@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "io/process.h"
+
 #include "batch_command.h"
 
 namespace omega::client::slurm {
@@ -23,9 +25,6 @@ struct Chunk {
 // [0, spp) in at most `chunks` contiguous ranges whose sizes differ by at most one (fewer when
 // spp < chunks: no chunk is empty).
 std::vector<Chunk> split_samples(uint64_t spp, int chunks);
-
-// s as one bash word: single-quoted, with ' written as '\''.
-std::string sh_quote(const std::string& s);
 
 // Everything about one manifest job that the scripts and sbatch calls need.
 struct FramePlan {
@@ -49,10 +48,7 @@ std::vector<std::string> render_sbatch_args(const SlurmSettings& s, const FrameP
 // ... and for the merge job; `dependency` e.g. "afterok:12" or "afterok:12_0:15_2" (empty: none).
 std::vector<std::string> merge_sbatch_args(const SlurmSettings& s, const FramePlan& f, const std::string& dependency);
 
-struct ProcResult {
-    int status = -1;  // exit status, or 128 + signal
-    std::string out, err;
-};
+using ProcResult = ProcessResult;  // io/process.h
 // Runs argv[0] (looked up in PATH) with argv, stdin from /dev/null, and collects its output.
 // Throws ClientError (exit 3) when the program cannot be started.
 ProcResult run_process(const std::vector<std::string>& argv);

@@ -72,6 +72,21 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             if (breakdown_length_ > 0) record_class(scratch, lc.s, 0, false, true, weighted);
         }
     }
+    // One strategy's contribution (s, t; through a mirror or not): the full path as it built it,
+    // connection included, is matched and keyed before its MIS-weighted value goes anywhere.
+    auto add = [&](const Connection& c, int s, int t, bool via_mirror) {
+        const Rgb unweighted = c.splat ? c.L * float(c.importance) : c.L;
+        const Rgb weighted = unweighted * float(c.weight);
+        if (per_strategy && !via_mirror) per_strategy->push_back({s, t, unweighted, weighted, c.splat, c.film});
+        const uint32_t mask = aovs_ ? scratch.lpe.match(s, t, via_mirror) : 0;
+        if (breakdown_length_ > 0) record_class(scratch, s, t, via_mirror, c.splat, weighted);
+        if (c.splat) {
+            splats.push_back({c.film, weighted, mask});
+        } else {
+            L += weighted;
+            for (uint32_t m = mask; m; m &= m - 1) scratch.aov_camera[size_t(std::countr_zero(m))] += weighted;
+        }
+    };
     // t = 1 needs no camera subpath; s = 1 samples its light vertex afresh (next-event estimation).
     const int t_max = std::max(n_cam, 1);
     for (int t = 1; t <= t_max; ++t) {
@@ -87,21 +102,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
             if (s >= 2 && s > n_light) continue;
             if (t == 1 && s > n_light) continue;
             if (s == 0 && cam[size_t(t - 1)].light < 0) continue;  // only a hit light can end here
-            auto c = connect(scene_, lit, cam, s, t, set_, sampler, stats, scratch.connect);
-            if (!c) continue;
-            Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
-            Rgb weighted = unweighted * float(c->weight);
-            if (per_strategy) per_strategy->push_back({s, t, unweighted, weighted, c->splat, c->film});
-            // The full path as this strategy built it, connection included, matched before its
-            // MIS-weighted value goes anywhere.
-            const uint32_t mask = aovs_ ? scratch.lpe.match(s, t) : 0;
-            if (breakdown_length_ > 0) record_class(scratch, s, t, false, c->splat, weighted);
-            if (c->splat) {
-                splats.push_back({c->film, weighted, mask});
-            } else {
-                L += weighted;
-                for (uint32_t m = mask; m; m &= m - 1) scratch.aov_camera[size_t(std::countr_zero(m))] += weighted;
-            }
+            if (auto c = connect(scene_, lit, cam, s, t, set_, sampler, stats, scratch.connect)) add(*c, s, t, false);
         }
     }
     // Connections through a planar mirror: the mirror vertex adds an edge, k = s + t.
@@ -114,17 +115,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
                 if ((t >= 2 && t > n_cam) || ((s >= 2 || t == 1) && s > n_light)) continue;
                 for (size_t i = 0; i < mirrors_->list.size(); ++i) {
                     auto c = connect_via_mirror(scene_, int(i), lit, cam, s, t, set_, sampler, stats, scratch.connect);
-                    if (!c) continue;
-                    Rgb unweighted = c->splat ? c->L * float(c->importance) : c->L;
-                    Rgb weighted = unweighted * float(c->weight);
-                    const uint32_t mask = aovs_ ? scratch.lpe.match(s, t, true) : 0;
-                    if (breakdown_length_ > 0) record_class(scratch, s, t, true, c->splat, weighted);
-                    if (c->splat) {
-                        splats.push_back({c->film, weighted, mask});
-                    } else {
-                        L += weighted;
-                        for (uint32_t m = mask; m; m &= m - 1) scratch.aov_camera[size_t(std::countr_zero(m))] += weighted;
-                    }
+                    if (c) add(*c, s, t, true);
                 }
             }
     }

@@ -47,6 +47,15 @@ PathVertex light_sample_vertex(size_t light, const LightSample& ls) {
     return v;
 }
 
+void assemble_full_path(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s, int t,
+                        const PathVertex* sampled_light, const PathVertex* sampled_sensor, const PathVertex* mirror,
+                        std::vector<PathVertex>& out) {
+    out.clear();
+    for (int i = 0; i < s; ++i) out.push_back((i == 0 && sampled_light) ? *sampled_light : light[size_t(i)]);
+    if (mirror) out.push_back(*mirror);
+    for (int j = t - 1; j >= 0; --j) out.push_back((j == 0 && sampled_sensor) ? *sampled_sensor : camera[size_t(j)]);
+}
+
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
                             const PathVertex* sampled_sensor, const PlanarMirrors* mirrors) {
@@ -276,9 +285,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
     }
     c.weight = w;
     if (full_path) {
-        full_path->clear();
-        for (int i = 0; i < s; ++i) full_path->push_back((i == 0 && sampled_light) ? *sampled_light : light[size_t(i)]);
-        for (int j = t - 1; j >= 0; --j) full_path->push_back((j == 0 && sampled_sensor) ? *sampled_sensor : camera[size_t(j)]);
+        assemble_full_path(light, camera, s, t, sampled_light, sampled_sensor, nullptr, *full_path);
         // This path scatters at the connection through eval(), not through the lobe the subpaths'
         // walks took next (see full_path_pdfs_into).
         for (int i : {s - 1, s})

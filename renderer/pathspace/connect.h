@@ -50,6 +50,13 @@ double light_endpoint_density(const Scene& scene, const PathVertex& v0);
 // The light endpoint that next-event estimation sampled (strategy s = 1), as a path vertex.
 PathVertex light_sample_vertex(size_t light, const LightSample& ls);
 
+// The full path of strategy (s, t), light first: light[0..s) (the first replaced by
+// sampled_light when given), then `mirror` when the planar-mirror connector made it, then
+// camera[t-1..0] (camera[0] replaced by sampled_sensor when given). For tests and checks.
+void assemble_full_path(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s, int t,
+                        const PathVertex* sampled_light, const PathVertex* sampled_sensor, const PathVertex* mirror,
+                        std::vector<PathVertex>& out);
+
 FullPathPdfs full_path_pdfs(const Scene& scene, const std::vector<PathVertex>& light,
                             const std::vector<PathVertex>& camera, int s, int t, const PathVertex* sampled_light,
                             const PathVertex* sampled_sensor, const PlanarMirrors* mirrors = nullptr);

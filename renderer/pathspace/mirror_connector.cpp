@@ -321,12 +321,7 @@ std::optional<Connection> connect_via_mirror(const Scene& scene, int mi, const s
         return std::nullopt;
     }
     c.weight = w;
-    if (full_path) {
-        full_path->clear();
-        for (int i = 0; i < s; ++i) full_path->push_back(i == 0 && sampled_light ? *sampled_light : light[size_t(i)]);
-        full_path->push_back(cam.back());
-        for (int j = t - 1; j >= 0; --j) full_path->push_back(j == 0 && sampled_sensor ? *sampled_sensor : camera[size_t(j)]);
-    }
+    if (full_path) assemble_full_path(light, camera, s, t, sampled_light, sampled_sensor, &cam.back(), *full_path);
     if (pdfs) *pdfs = fp;
     return c;
 }
