@@ -154,6 +154,9 @@ class Server : public FrameSink {
   // Units of the job's running set go back to the queue; their workers get unit_stop.
   void stop_units(std::uint64_t job, const std::string& reason);
   void release_worker_units(Connection& c);  // a worker left
+  // Loop thread: a running unit goes back to the queue, in the store first (a store error is
+  // logged: the next start requeues what the store still calls running).
+  void requeue_unit(std::uint64_t job, UnitRecord& u);
   void advance_fold(std::uint64_t job);
   void on_fold(FoldUpdate u);
   void finish_work_job(std::uint64_t job, const std::string& why);

@@ -456,16 +456,20 @@ void Server::stop_units(std::uint64_t job, const std::string& reason) {
   if (it == work_.end()) return;
   for (UnitRecord& u : it->second.units) {
     if (u.state != UnitState::running) continue;
-    UnitRecord q = u;
-    q.state = UnitState::queued;
-    q.owner.clear();
-    try {
-      store_->put_unit(q);
-    } catch (const std::exception& e) {
-      log_.error("job {}: cannot requeue unit {}: {} (the next start does)", job, u.unit, e.what());
-    }
-    u = q;
+    requeue_unit(job, u);
   }
+}
+
+void Server::requeue_unit(std::uint64_t job, UnitRecord& u) {
+  UnitRecord q = u;
+  q.state = UnitState::queued;
+  q.owner.clear();
+  try {
+    store_->put_unit(q);
+  } catch (const std::exception& e) {
+    log_.error("job {}: cannot requeue unit {}: {} (the next start does)", job, u.unit, e.what());
+  }
+  u = q;
 }
 
 void Server::release_worker_units(Connection& c) {
@@ -475,15 +479,7 @@ void Server::release_worker_units(Connection& c) {
     if (it == work_.end() || unit >= it->second.units.size()) continue;
     UnitRecord& u = it->second.units[unit];
     if (u.state != UnitState::running) continue;
-    UnitRecord q = u;
-    q.state = UnitState::queued;
-    q.owner.clear();
-    try {
-      store_->put_unit(q);
-    } catch (const std::exception& e) {
-      log_.error("job {}: cannot requeue unit {}: {} (the next start does)", job, unit, e.what());
-    }
-    u = q;
+    requeue_unit(job, u);
     log_.info("job {}: unit {} (samples {}) back to the queue: {} left", job, unit, range_text(u.begin, u.end),
               c.worker->name);
   }

@@ -11,9 +11,15 @@ using detail::finish_decode;
 
 namespace {
 constexpr double kHugeRate = 1e300;
-// A unit's range: begin < end, within the spp any daemon accepts.
-void check_range(FieldReader& r, std::uint64_t begin, std::uint64_t end) {
-  if (r.ok() && begin >= end) r.fail(DecodeError::invalid_value, "end", "must be greater than begin");
+// The unit a work_unit or unit_result names: job, unit, and its range, begin < end, within the
+// spp any daemon accepts.
+template <class M>
+void read_unit(FieldReader& r, M& m) {
+  m.job = r.u64("job");
+  m.unit = r.u64("unit");
+  m.begin = r.u64("begin", 0, 1ull << 40);
+  m.end = r.u64("end", 1, 1ull << 40);
+  if (r.ok() && m.begin >= m.end) r.fail(DecodeError::invalid_value, "end", "must be greater than begin");
 }
 }  // namespace
 
@@ -50,11 +56,7 @@ Result<WorkUnit, DecodeError> decode<WorkUnit>(const DecodedFrame& f) {
   FieldReader r(f.header);
   WorkUnit m;
   m.id = f.id;
-  m.job = r.u64("job");
-  m.unit = r.u64("unit");
-  m.begin = r.u64("begin", 0, 1ull << 40);
-  m.end = r.u64("end", 1, 1ull << 40);
-  check_range(r, m.begin, m.end);
+  read_unit(r, m);
   m.seed = r.u64("seed");
   m.name = r.str("name", kMaxNameBytes);
   m.integrator = detail::read_identifier(r, "integrator");
@@ -94,11 +96,7 @@ Result<UnitResult, DecodeError> decode<UnitResult>(const DecodedFrame& f) {
   FieldReader r(f.header);
   UnitResult m;
   m.id = f.id;
-  m.job = r.u64("job");
-  m.unit = r.u64("unit");
-  m.begin = r.u64("begin", 0, 1ull << 40);
-  m.end = r.u64("end", 1, 1ull << 40);
-  check_range(r, m.begin, m.end);
+  read_unit(r, m);
   m.time_s = r.f64("time_s", 0, 1e9);
   m.samples_per_s = r.f64("samples_per_s", 0, kHugeRate);
   m.part = f.payload;
