@@ -40,6 +40,9 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
                             ? generate_light_subpath(scene_, light_limits_, sampler, stats, lit, use_t0_ ? &scratch.lens : nullptr)
                             : 0;
     if (n_light == 0) lit.clear();
+    // Without the connector, bdpt's weights come from the subpaths' sums (pathspace/mis_prefix.h).
+    const bool prefixed = set_.type == IntegratorType::Bdpt && !set_.mirrors;
+    if (prefixed) scratch.connect.prefix.prepare(scene_, lit, cam);
 
     Rgb L(0.f);
     if (aovs_) {
@@ -119,6 +122,7 @@ Rgb BdptTracer::sample(const Ray& ray, Sampler& sampler, TracerStats& stats, Bdp
                 }
             }
     }
+    scratch.connect.prefix.reset();
     return L;
 }
 

@@ -4,6 +4,7 @@
 
 #include "light/light_emission.h"
 #include "pathspace/mirror_connector.h"
+#include "pathspace/mis_prefix.h"
 #include "scene/spawn.h"
 
 namespace omega {
@@ -101,38 +102,13 @@ void full_path_pdfs_into(const Scene& scene, const std::vector<PathVertex>& ligh
     if (s >= 1 && t >= 1) {
         const PathVertex& a = V(s - 1);  // light side
         const PathVertex& b = V(s);      // sensor side
-        // The connection scatters at a and b through eval(), i.e. their non-delta lobes, whatever
-        // lobe their own walks sampled next: a BSDF that mixes a delta lobe with others (smooth
-        // plastic: mirror + substrate) may have recorded delta for the continuation that this
-        // path does not take. pbrt-v3's MISWeight resets the same flags. Left as recorded for a
-        // delta-only BSDF: eval() is 0 there, and every split keeps the same table. Flags, not
-        // vertex copies: this runs for every connection.
-        auto connected_delta = [](const PathVertex& v) {
-            return v.delta && !(v.kind == VertexKind::Surface && v.bsdf && bsdf_has_nondelta(*v.bsdf));
-        };
-        const bool a_delta = connected_delta(a), b_delta = connected_delta(b);
-        auto through_a = [&](double pdf_area) { return a_delta ? 1.0 : pdf_area; };
-        auto through_b = [&](double pdf_area) { return b_delta ? 1.0 : pdf_area; };
-        if (s - 1 > 0) fp.delta[size_t(s - 1)] = a_delta ? 1 : 0;
-        if (s < n - 1) fp.delta[size_t(s)] = b_delta ? 1 : 0;
-        // A density taken through a delta vertex is the discrete 1, as the walks record it. Only
-        // impossible strategies connect there, but every split must yield the same table.
-        // p_sensor[s-1]: b generating a.
-        if (t == 1) fp.p_sensor[size_t(s - 1)] = sensor_density_at(scene, b, a);
-        else fp.p_sensor[size_t(s - 1)] = through_b(to_area_density(b, vertex_pdf_sa(b, b.wo, direction(b, a)), a));
-        // p_sensor[s-2]: a generating its predecessor, having arrived from b.
-        if (s >= 2) {
-            const PathVertex& a2 = V(s - 2);
-            fp.p_sensor[size_t(s - 2)] = through_a(to_area_density(a, vertex_pdf_sa(a, direction(a, b), direction(a, a2)), a2));
-        }
-        // p_light[s]: a generating b.
-        if (s == 1) fp.p_light[1] = emission_density_at(scene, a, b);
-        else fp.p_light[size_t(s)] = through_a(to_area_density(a, vertex_pdf_sa(a, a.wo, direction(a, b)), b));
-        // p_light[s+1]: b generating its successor towards the sensor, having arrived from a.
-        if (t >= 2) {
-            const PathVertex& b2 = V(s + 1);
-            fp.p_light[size_t(s + 1)] = through_b(to_area_density(b, vertex_pdf_sa(b, direction(b, a), direction(b, b2)), b2));
-        }
+        const EdgeDensities e = edge_densities(scene, a, s >= 2 ? &V(s - 2) : nullptr, b, t >= 2 ? &V(s + 1) : nullptr, s, t);
+        if (s - 1 > 0) fp.delta[size_t(s - 1)] = e.a_delta ? 1 : 0;
+        if (s < n - 1) fp.delta[size_t(s)] = e.b_delta ? 1 : 0;
+        fp.p_sensor[size_t(s - 1)] = e.sensor_a;
+        if (s >= 2) fp.p_sensor[size_t(s - 2)] = e.sensor_a2;
+        fp.p_light[size_t(s)] = e.light_b;
+        if (t >= 2) fp.p_light[size_t(s + 1)] = e.light_b2;
     } else if (t == 0 && n >= 2) {
         // The light subpath hit the lens b = v_k: the sensor side's densities at the end of the
         // path, which the light walk could not know (as for s = 0 at the other end).
@@ -276,9 +252,22 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         return c;
     }
 
-    FullPathPdfs& fp = cstats.table;
-    full_path_pdfs_into(scene, light, camera, s, t, sampled_light, sampled_sensor, fp, set.mirrors);
-    double w = mis_weight(fp, s, set);
+    double w;
+    if (!full_path && !pdfs && s + t >= 3 && set.type == IntegratorType::Bdpt && !set.mirrors &&
+        cstats.prefix.covers(light, camera)) {
+        // BDPT's common case: no table, the subpaths' sums beyond the edge (pathspace/mis_prefix.h).
+        const PathVertex& a = s == 0 ? camera[size_t(t - 1)] : (s == 1 && sampled_light ? *sampled_light : light[size_t(s - 1)]);
+        const PathVertex& b = t == 1 && sampled_sensor ? *sampled_sensor : camera[size_t(t - 1)];
+        EdgeDensities e;
+        if (s >= 1)
+            e = edge_densities(scene, a, s >= 2 ? &light[size_t(s - 2)] : nullptr, b, t >= 2 ? &camera[size_t(t - 2)] : nullptr,
+                               s, t);
+        w = mis_weight_prefixed(scene, cstats.prefix, s, t, e, sampled_light, sampled_sensor);
+    } else {
+        FullPathPdfs& fp = cstats.table;
+        full_path_pdfs_into(scene, light, camera, s, t, sampled_light, sampled_sensor, fp, set.mirrors);
+        w = mis_weight(fp, s, set);
+    }
     if (w < 0) {
         ++cstats.bad_weights;
         return std::nullopt;
@@ -294,7 +283,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
                 if (v.kind == VertexKind::Surface && v.bsdf && bsdf_has_nondelta(*v.bsdf)) v.delta = false;
             }
     }
-    if (pdfs) *pdfs = fp;
+    if (pdfs) *pdfs = cstats.table;
     return c;
 }
 

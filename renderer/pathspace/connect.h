@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "pathspace/mis.h"
+#include "pathspace/mis_prefix.h"
 #include "pathspace/subpath.h"
 
 namespace omega {
@@ -23,6 +24,7 @@ struct ConnectStats {
     uint64_t bad_weights = 0;  // non-finite MIS weights: counted as errors, contribution dropped
     FullPathPdfs table;        // reused: no allocation per connection once warmed up
     std::vector<PathVertex> mirror_camera;  // the planar-mirror connector's camera side with the mirror vertex
+    MisPrefixes prefix;  // BDPT: the current sample's subpath sums; connect() uses them when they cover its subpaths
 };
 
 // Strategy (s, t) for the given subpaths. Tests may ask for the full path v_0..v_k (light end

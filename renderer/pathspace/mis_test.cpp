@@ -55,11 +55,33 @@ double weight_for_split(const Scene& scene, const std::vector<PathVertex>& v, in
 }
 
 struct Checked {
+    int prefixed = 0;  // connections whose prefixed BDPT weight matched the table's
     int paths = 0;
     int connector_paths = 0;  // sampled by the planar-mirror connector
     int t0_paths = 0;  // sampled by t = 0
     int max_vertices = 0;
 };
+
+// BDPT without the connector weighs a connection from the subpaths' sums (mis_prefix.h): the
+// same weight as the table's, to rounding, for every connection, and the same path (or none).
+int check_prefixed_weight(const Scene& scene, const std::vector<PathVertex>& lit, const std::vector<PathVertex>& cam,
+                          int s, int t, const Sampler& sampler, bool lens_hittable) {
+    if (s + t < 3) return 0;
+    StrategySet set{IntegratorType::Bdpt};
+    set.lens_hittable = lens_hittable;
+    TracerStats stats;
+    ConnectStats table, prefixed;
+    prefixed.prefix.prepare(scene, lit, cam);
+    Sampler u1 = sampler, u2 = sampler;  // both draw the same endpoint samples (s = 1, t = 1)
+    FullPathPdfs fp;
+    auto a = connect(scene, lit, cam, s, t, set, u1, stats, table, nullptr, &fp);
+    auto b = connect(scene, lit, cam, s, t, set, u2, stats, prefixed);
+    EXPECT_EQ(a.has_value(), b.has_value()) << "s=" << s << " t=" << t;
+    if (!a || !b) return 0;
+    EXPECT_NEAR(b->weight, a->weight, 1e-12 + 1e-12 * a->weight) << "s=" << s << " t=" << t;
+    EXPECT_EQ(table.bad_weights, prefixed.bad_weights);
+    return 1;
+}
 
 // Samples subpath pairs, connects every strategy, and checks the weight sum for each full path.
 Checked check_scene(const SceneDesc& desc, int samples, int max_depth) {
@@ -89,6 +111,7 @@ Checked check_scene(const SceneDesc& desc, int samples, int max_depth) {
                 if (k < 1 || k > max_depth) continue;
                 if (!lc && ((t >= 2 && t > nc) || (s >= 2 && s > nl) || (t == 1 && s > nl))) continue;
                 if (!lc && s == 0 && cam[size_t(t - 1)].light < 0) continue;
+                if (!lc) out.prefixed += check_prefixed_weight(*scene, lit, cam, s, t, rng, sensor.lens_hittable());
                 std::vector<PathVertex> full;
                 FullPathPdfs fp;
                 for (IntegratorType type : {IntegratorType::Bdpt, IntegratorType::Path, IntegratorType::Light})
@@ -207,6 +230,7 @@ TEST(MisWeights, SumToOneDiffuseBoxAreaLight) {
     d.shapes.push_back(light);
     auto c = check_scene(d, 200, 6);
     EXPECT_GT(c.paths, 1000);
+    EXPECT_GT(c.prefixed, 500);
 }
 
 // The mirror box with a diffuse floor and a point light: L S D ... paths through chains of mirrors.
@@ -226,6 +250,7 @@ TEST(MisWeights, SumToOnePointLightPinholeWithMirrors) {
     SceneDesc d = mirror_box_point_light();
     auto c = check_scene(d, 200, 7);
     EXPECT_GT(c.paths, 500);
+    EXPECT_GT(c.prefixed, 100);
     EXPECT_GT(c.connector_paths, 200);
 }
 
@@ -275,6 +300,7 @@ TEST(MisWeights, SumToOneGlossyGlassSphereLightAndSpot) {
     d.lights.push_back(spot);
     auto c = check_scene(d, 200, 6);
     EXPECT_GT(c.paths, 500);
+    EXPECT_GT(c.prefixed, 100);
 }
 
 TEST(MisWeights, SumToOneOrthographicDirectionalAndEnvironment) {
@@ -302,6 +328,7 @@ TEST(MisWeights, SumToOneOrthographicDirectionalAndEnvironment) {
     d.lights.push_back(sky);
     auto c = check_scene(d, 300, 5);
     EXPECT_GT(c.paths, 500);
+    EXPECT_GT(c.prefixed, 100);
 }
 
 TEST(MisWeights, SumToOneThinLens) {
@@ -314,6 +341,7 @@ TEST(MisWeights, SumToOneThinLens) {
     d.shapes.push_back(light);
     auto c = check_scene(d, 150, 5);
     EXPECT_GT(c.paths, 500);
+    EXPECT_GT(c.prefixed, 100);
 }
 
 // t = 0 where it is the only strategy: a point light seen in a mirror through a thin lens
@@ -326,6 +354,7 @@ TEST(MisWeights, SumToOneThinLensPointLightMirrors) {
     d.sensor.focus_distance = 1.0f;
     auto c = check_scene(d, 1500, 6);
     EXPECT_GT(c.paths, 500);
+    EXPECT_GT(c.prefixed, 100);
     EXPECT_GT(c.t0_paths, 20);
     EXPECT_GT(c.connector_paths, 200);  // bdpt's connectors beside t = 0, which it weighs
 }
@@ -338,6 +367,7 @@ TEST(MisWeights, LongSpecularChainsStayFinite) {
     d.shapes.push_back(light);
     auto c = check_scene(d, 40, 70);
     EXPECT_GE(c.max_vertices, 60);
+    EXPECT_GT(c.prefixed, 20);
 }
 
 }  // namespace
