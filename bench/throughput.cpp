@@ -1,6 +1,7 @@
-// bench/throughput: renders a scene (default: the shared Cornell box in YAML v1) at 256x256 with
-// max_depth 9 and prints samples/s and rays/s for 1 and 2 threads (the speedup), next to
-// Embree's raw rate for incoherent rays on the same BVH, measured in the same run.
+// bench/throughput [SCENE] [SPP] [N]: renders a scene (default: the Cornell box) at 256x256 with
+// max_depth 9 and prints samples/s and rays/s for 1, 2, 4, ... N threads (N: every hardware
+// thread), with the speedup over 1 thread next to Embree's own, and each rate against Embree's
+// raw rate for incoherent rays on the same BVH at the same thread count, all in the same run.
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -10,6 +11,8 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "integrator/render_session.h"
 #include "sampling/rng.h"
@@ -73,6 +76,11 @@ double embree_raw_rate(const Scene& scene, int threads, long long rays) {
 int main(int argc, char** argv) {
     std::string path = argc > 1 ? argv[1] : OMEGA_SOURCE_DIR "/scenes/cornell-box.yaml";
     long long spp = argc > 2 ? std::stoll(argv[2]) : 32;
+    // Thread counts 1, 2, 4, ... up to N (argv[3], default: every hardware thread), N included.
+    const int max_threads = argc > 3 ? std::max(1, std::stoi(argv[3])) : std::max(1, int(std::thread::hardware_concurrency()));
+    std::vector<int> counts;
+    for (int n = 1; n < max_threads; n *= 2) counts.push_back(n);
+    counts.push_back(max_threads);
     SceneDesc desc = parse_scene_file(path);
     desc.sensor.film.width = desc.sensor.film.height = 256;
     desc.sensor.film.has_crop = false;
@@ -80,34 +88,39 @@ int main(int argc, char** argv) {
     desc.integrator.max_depth = 9;
     auto scene = Scene::build(desc);
 
-    render_rate(*scene, 2, 2);  // warm-up: page in the BVH and the allocator
-    Rate r1 = render_rate(*scene, 1, spp);
-    Rate r2 = render_rate(*scene, 2, spp);
-    long long raw_rays = (long long)std::max(2e6, r2.rays_per_s * 3);
-    double e1 = embree_raw_rate(*scene, 1, raw_rays / 2);
-    double e2 = embree_raw_rate(*scene, 2, raw_rays);
-
+    render_rate(*scene, max_threads, 2);  // warm-up: page in the BVH and the allocator
     fmt::print("scene {}  256x256  max_depth 9  {} spp\n", path, spp);
-    fmt::print("{:>10} {:>14} {:>14} {:>16} {:>12}\n", "threads", "Msamples/s", "Mrays/s", "Embree Mrays/s", "ratio");
-    fmt::print("{:>10} {:>14.3f} {:>14.3f} {:>16.3f} {:>12.3f}\n", 1, r1.samples_per_s / 1e6, r1.rays_per_s / 1e6, e1 / 1e6,
-               r1.rays_per_s / e1);
-    fmt::print("{:>10} {:>14.3f} {:>14.3f} {:>16.3f} {:>12.3f}\n", 2, r2.samples_per_s / 1e6, r2.rays_per_s / 1e6, e2 / 1e6,
-               r2.rays_per_s / e2);
-    fmt::print("speedup 1 -> 2 threads: renderer {:.2f}x, Embree raw {:.2f}x\n", r2.samples_per_s / r1.samples_per_s,
-               e2 / e1);
+    fmt::print("{:>10} {:>14} {:>14} {:>16} {:>12} {:>18} {:>16}\n", "threads", "Msamples/s", "Mrays/s", "Embree Mrays/s",
+               "ratio", "speedup renderer", "speedup Embree");
+    Rate r1{};
+    double e1 = 0, e_max = 0;
+    for (int n : counts) {
+        // Each count renders the same samples, so the speedup is a ratio of rates in this run.
+        Rate r = render_rate(*scene, n, spp);
+        long long raw_rays = (long long)std::max(1e6 * n, r.rays_per_s * 1.5);
+        double e = embree_raw_rate(*scene, n, raw_rays);
+        if (n == 1) r1 = r, e1 = e;
+        e_max = e;
+        fmt::print("{:>10} {:>14.3f} {:>14.3f} {:>16.3f} {:>12.3f} {:>18.2f} {:>16.2f}\n", n, r.samples_per_s / 1e6,
+                   r.rays_per_s / 1e6, e / 1e6, r.rays_per_s / e, r.samples_per_s / r1.samples_per_s, e / e1);
+    }
+    fmt::print("speedup 1 -> {} threads below 0.9 x {} means something is shared that should not be\n", max_threads,
+               max_threads);
 
-    // The splatting integrators on the same scene and BVH, 2 threads, in the same run: their
+    // The splatting integrators on the same scene and BVH, all threads, in the same run: their
     // rays/s against Embree's raw rate shows how much of their time is bookkeeping (densities,
     // MIS, splats) rather than ray queries.
+    Rate path_max = render_rate(*scene, max_threads, std::max(1LL, spp / 8));
     fmt::print("{:>10} {:>14} {:>14} {:>16} {:>12} {:>14}\n", "integrator", "Msamples/s", "Mrays/s", "rays/sample",
                "vs Embree", "samples vs path");
     for (IntegratorType t : {IntegratorType::Light, IntegratorType::Bdpt}) {
         SceneDesc d = desc;
         d.integrator.type = t;
         auto sc = Scene::build(d);
-        Rate r = render_rate(*sc, 2, std::max(1LL, spp / 8));
+        Rate r = render_rate(*sc, max_threads, std::max(1LL, spp / 8));
         fmt::print("{:>10} {:>14.3f} {:>14.3f} {:>16.1f} {:>12.3f} {:>14.3f}\n", integrator_name(t), r.samples_per_s / 1e6,
-                   r.rays_per_s / 1e6, r.rays_per_s / r.samples_per_s, r.rays_per_s / e2, r.samples_per_s / r2.samples_per_s);
+                   r.rays_per_s / 1e6, r.rays_per_s / r.samples_per_s, r.rays_per_s / e_max,
+                   r.samples_per_s / path_max.samples_per_s);
     }
     return 0;
 }

@@ -164,6 +164,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
     Connection c;
     // Only s = 1 and t = 1 sample an endpoint: most connections (s, t >= 2) skip building one.
     std::optional<PathVertex> sampled;
+    VertexLocal ly, lz;  // s, t >= 2: both ends in their shading frames, for f and the densities
     const PathVertex* sampled_light = nullptr;
     const PathVertex* sampled_sensor = nullptr;
     if (s == 0) {
@@ -186,10 +187,11 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         sampler.start_dimension(dims::connect_sensor(s));
         auto sc = sensor.sample_wi(y.p(), sampler.next_2d());
         if (!sc) return std::nullopt;
-        sampled = sensor_vertex(scene, sc->p);
-        if (!set.single_strategy() || full_path || pdfs)  // only the density table reads it
+        if (!set.single_strategy() || full_path || pdfs) {  // only the MIS weight and the tests read it
+            sampled = sensor_vertex(scene, sc->p);
             sampled->pdf_fwd = sensor.delta_direction() ? 1.0 : sensor.pdf_we(sc->p, -sc->wi).pos;
-        sampled_sensor = &*sampled;
+            sampled_sensor = &*sampled;
+        }
         if (y.kind == VertexKind::Light) {
             // s = 1: the light itself seen by the sensor. Emission towards the sensor over the
             // density of the light endpoint (selection x position).
@@ -236,9 +238,11 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         Vec3 d = z.p() - y.p();
         float dist2 = length_sq(d);
         if (!(dist2 > 0)) return std::nullopt;
-        Vec3 w = d / std::sqrt(dist2);
-        Rgb fy = vertex_f(y, w, TransportMode::Importance);
-        Rgb fz = vertex_f(z, -w, TransportMode::Radiance);
+        Vec3 w = d / std::sqrt(dist2);  // = direction(y, z), bit for bit
+        ly = {y.shading.to_local(y.wo), y.shading.to_local(w)};
+        lz = {z.shading.to_local(z.wo), z.shading.to_local(-w)};
+        Rgb fy = vertex_f(y, w, ly, TransportMode::Importance);
+        Rgb fz = vertex_f(z, -w, lz, TransportMode::Radiance);
         if (is_black(fy) || is_black(fz)) return std::nullopt;
         float g = absdot(w, y.hit.ns) * absdot(w, z.hit.ns) / dist2;
         c.L = y.beta * fy * fz * z.beta * g;
@@ -261,7 +265,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         EdgeDensities e;
         if (s >= 1)
             e = edge_densities(scene, a, s >= 2 ? &light[size_t(s - 2)] : nullptr, b, t >= 2 ? &camera[size_t(t - 2)] : nullptr,
-                               s, t);
+                               s, t, s >= 2 && t >= 2 ? &ly : nullptr, s >= 2 && t >= 2 ? &lz : nullptr);
         w = mis_weight_prefixed(scene, cstats.prefix, s, t, e, sampled_light, sampled_sensor);
     } else {
         FullPathPdfs& fp = cstats.table;

@@ -9,7 +9,7 @@
 namespace omega {
 
 EdgeDensities edge_densities(const Scene& scene, const PathVertex& a, const PathVertex* a2, const PathVertex& b,
-                             const PathVertex* b2, int s, int t) {
+                             const PathVertex* b2, int s, int t, const VertexLocal* la, const VertexLocal* lb) {
     EdgeDensities e;
     // The connection scatters at a and b through eval(), i.e. their non-delta lobes, whatever
     // lobe their own walks sampled next: a BSDF that mixes a delta lobe with others (smooth
@@ -26,13 +26,20 @@ EdgeDensities edge_densities(const Scene& scene, const PathVertex& a, const Path
     auto through_a = [&](double pdf_area) { return e.a_delta ? 1.0 : pdf_area; };
     auto through_b = [&](double pdf_area) { return e.b_delta ? 1.0 : pdf_area; };
     // The walks' wo is direction(v, predecessor), computed from the same stored positions.
+    // vertex_pdf_sa(v, from, to) is the BSDF's density between the two directions in v's frame.
     const Vec3 ab = direction(a, b);
+    auto pdf = [](const PathVertex& v, const Vec3& from_l, const Vec3& to_l) {
+        return double(bsdf_pdf_sa(*v.bsdf, from_l, to_l, TransportMode::Radiance));
+    };
+    VertexLocal local_a, local_b;
+    if (s >= 2 && !la) la = &(local_a = {a.shading.to_local(a.wo), a.shading.to_local(ab)});
+    if (t >= 2 && !lb) lb = &(local_b = {b.shading.to_local(b.wo), b.shading.to_local(-ab)});
     if (t == 1) e.sensor_a = sensor_density_at(scene, b, a);
-    else e.sensor_a = through_b(to_area_density(b, vertex_pdf_sa(b, b.wo, -ab), a));
-    if (a2) e.sensor_a2 = through_a(to_area_density(a, vertex_pdf_sa(a, ab, a.wo), *a2));
+    else e.sensor_a = through_b(to_area_density(b, pdf(b, lb->wo, lb->w), a));
+    if (a2) e.sensor_a2 = through_a(to_area_density(a, pdf(a, la->w, la->wo), *a2));
     if (s == 1) e.light_b = emission_density_at(scene, a, b);
-    else e.light_b = through_a(to_area_density(a, vertex_pdf_sa(a, a.wo, ab), b));
-    if (b2) e.light_b2 = through_b(to_area_density(b, vertex_pdf_sa(b, -ab, b.wo), *b2));
+    else e.light_b = through_a(to_area_density(a, pdf(a, la->wo, la->w), b));
+    if (b2) e.light_b2 = through_b(to_area_density(b, pdf(b, lb->w, lb->wo), *b2));
     return e;
 }
 

@@ -17,6 +17,7 @@
 // vertices; everything else keeps the table (connect() decides).
 #include <vector>
 
+#include "pathspace/subpath.h"
 #include "pathspace/vertex.h"
 
 namespace omega {
@@ -32,9 +33,11 @@ struct EdgeDensities {
     double light_b2 = 0;   // p_light[s+1]: b generating its successor, arrived from a (t >= 2)
     bool a_delta = false, b_delta = false;  // delta as the connection scatters (eval's lobes only)
 };
-// a2 = v_{s-2} (null for s = 1), b2 = v_{s+1} (null for t = 1).
+// a2 = v_{s-2} (null for s = 1), b2 = v_{s+1} (null for t = 1). la / lb, when given, are a's and
+// b's VertexLocal for the edge (w = direction(a, b) at a, its opposite at b): the same numbers.
 EdgeDensities edge_densities(const Scene& scene, const PathVertex& a, const PathVertex* a2, const PathVertex& b,
-                             const PathVertex* b2, int s, int t);
+                             const PathVertex* b2, int s, int t, const VertexLocal* la = nullptr,
+                             const VertexLocal* lb = nullptr);
 
 // Per thread; the BDPT tracer prepares it after each sample's walks and resets it after its
 // connections. connect() uses it only when it was prepared for the very subpaths it is given.

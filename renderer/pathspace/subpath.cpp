@@ -38,6 +38,23 @@ double density_towards(const Scene& scene, const std::vector<PathVertex>& path, 
     return to_area_density(cur, vertex_pdf_sa(cur, cur.wo, direction(cur, v)), v);
 }
 
+// Both densities a new vertex v settles (forward at v, reverse at the predecessor of the walk's
+// last vertex) as density_towards and density_back give them; a non-delta surface scatters both
+// between the same two directions, which go to its shading frame once.
+void walk_densities(const Scene& scene, std::vector<PathVertex>& path, PathVertex& v) {
+    const size_t n = path.size();
+    const PathVertex& cur = path.back();
+    if (cur.kind == VertexKind::Surface && !cur.delta) {
+        // cur.wo is direction(cur, predecessor), computed from the same positions.
+        const Vec3 wo_l = cur.shading.to_local(cur.wo), w_l = cur.shading.to_local(direction(cur, v));
+        v.pdf_fwd = to_area_density(cur, bsdf_pdf_sa(*cur.bsdf, wo_l, w_l, TransportMode::Radiance), v);
+        if (n >= 2) path[n - 2].pdf_rev = to_area_density(cur, bsdf_pdf_sa(*cur.bsdf, w_l, wo_l, TransportMode::Radiance), path[n - 2]);
+        return;
+    }
+    v.pdf_fwd = density_towards(scene, path, v);
+    if (n >= 2) path[n - 2].pdf_rev = density_back(scene, path, v);
+}
+
 // spawn_ray moved the origin off the surface by its error bound: about 4e-7 of the coordinates,
 // so 0.04 units at 1e5 from the origin. The walk's next vertex must lie on the ray from the vertex
 // itself, or every emitted ray lands as if the light were that much closer (light tracing read
@@ -76,7 +93,6 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
     while (int(path.size()) < lim.max_vertices) {
         SurfaceHit hit;
         ++stats.rays;
-        const size_t n = path.size();
         const bool found = scene.intersect(ray, hit);
         if (found && !path.back().infinite) reanchor_hit(path.back().p(), ray, hit);
         if (lens) record_lens_crossing(scene, ray, found ? hit.t : ray.tmax, beta, path, *lens);
@@ -90,10 +106,7 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
                 v.dir = -normalize(ray.d);
                 v.light = env;
                 v.beta = beta;
-                if (lim.densities) {
-                    v.pdf_fwd = density_towards(scene, path, v);
-                    if (n >= 2) path[n - 2].pdf_rev = density_back(scene, path, v);
-                }
+                if (lim.densities) walk_densities(scene, path, v);
                 path.push_back(v);
             }
             break;
@@ -110,10 +123,7 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
         v.beta = beta;
         // Densities from the vertex positions, exactly as a connection would compute them, so
         // every split of a path sees the same numbers.
-        if (lim.densities) {
-            v.pdf_fwd = density_towards(scene, path, v);
-            if (n >= 2) path[n - 2].pdf_rev = density_back(scene, path, v);
-        }
+        if (lim.densities) walk_densities(scene, path, v);
         path.push_back(v);
         if (int(path.size()) >= lim.max_vertices) break;
         PathVertex& cur = path.back();
@@ -200,7 +210,12 @@ double to_area_density(const PathVertex& from, double pdf_sa, const PathVertex& 
 }
 
 Rgb vertex_f(const PathVertex& v, const Vec3& wi, TransportMode mode) {
-    Vec3 wo_l = v.shading.to_local(v.wo), wi_l = v.shading.to_local(wi);
+    return vertex_f(v, wi, VertexLocal{v.shading.to_local(v.wo), v.shading.to_local(wi)}, mode);
+}
+
+Rgb vertex_f(const PathVertex& v, const Vec3& wi, const VertexLocal& l, TransportMode mode) {
+    const Vec3& wo_l = l.wo;
+    const Vec3& wi_l = l.w;
     if (!consistent_side(wi, v.hit.ng, wi_l.z)) return Rgb(0.f);
     Bsdf textured;
     Rgb f = bsdf_eval(resolve_bsdf(*v.bsdf, v.hit.uv, textured), wo_l, wi_l, mode);

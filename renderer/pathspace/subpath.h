@@ -58,6 +58,13 @@ double emission_density_at(const Scene& scene, const PathVertex& v0, const PathV
 // f at a surface vertex towards world direction wi, with the previous vertex of its own
 // subpath on the wo side. In Importance mode the shading-normal correction (Veach 5.3) applies.
 Rgb vertex_f(const PathVertex& v, const Vec3& wi, TransportMode mode);
+// A vertex's wo and a connection direction w in its shading frame: a connection needs them for
+// f and for both densities at the vertex, and to_local was a tenth of BDPT's instructions.
+struct VertexLocal {
+    Vec3 wo, w;
+};
+// The same as vertex_f(v, wi, mode), with l = {to_local(v.wo), to_local(wi)} already at hand.
+Rgb vertex_f(const PathVertex& v, const Vec3& wi, const VertexLocal& l, TransportMode mode);
 // Solid-angle density at surface vertex v of sampling direction `to` when the walk arrived
 // from direction `from` (both unit world directions pointing away from v).
 double vertex_pdf_sa(const PathVertex& v, const Vec3& from, const Vec3& to);
