@@ -32,11 +32,7 @@ void merge_breakdowns(const std::vector<ExrMeta>& parts, const std::string& outp
         for (const ExrMeta& m : parts) {
             auto it = m.attributes.find("omega.breakdown_state");
             if (it == m.attributes.end()) throw std::invalid_argument("a part carries no omega.breakdown_state");
-            BreakdownState s = parse_breakdown_state(it->second);
-            if (!all) all = std::move(s);
-            else if (s.region != all->region || s.max_length != all->max_length)
-                throw std::invalid_argument("the parts' breakdowns differ in region or length");
-            else all->stats.merge(s.stats);
+            merge_breakdown_state(all, parse_breakdown_state(it->second));
         }
         out.attributes["omega.breakdown"] = breakdown_csv(make_breakdown_report(all->stats, all->region, all->max_length));
         out.attributes["omega.breakdown_state"] = breakdown_state_text(*all);

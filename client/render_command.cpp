@@ -26,6 +26,7 @@
 #include "scene/mitsuba_importer.h"
 #include "scene/scene_parser.h"
 #include "scene_hash.h"
+#include "session_outputs.h"
 
 namespace omega {
 
@@ -256,19 +257,9 @@ int run_render(const RenderArgs& a) {
     meta.warnings = desc.warnings;
     meta.rel_error = last.error.mean_rel_error;
     if (const StrategyImages* si = session->strategy_images()) meta.layers = si->layers(last.spp);
-    static const std::vector<AovFilm> kNoAovs;
-    const std::vector<AovFilm>& aovs = session->aovs() ? session->aovs()->films() : kNoAovs;
-    append_aov_layers(aovs, meta);
-    std::optional<BreakdownReport> breakdown;
-    if (const BreakdownCollector* bc = session->breakdown()) {
-        breakdown = bc->report();
-        meta.attributes["omega.breakdown"] = breakdown_csv(*breakdown);
-        meta.attributes["omega.breakdown_samples"] = fmt::format("{}:{}", rs.first_sample, last.spp);
-        // A part also carries the exact sums, which `omega merge` adds up exactly.
-        if (range)
-            meta.attributes["omega.breakdown_state"] =
-                breakdown_state_text({bc->region_name(), bc->max_length(), bc->stats()});
-    }
+    const std::vector<AovFilm>& aovs = session_aov_films(*session);
+    const std::optional<BreakdownReport> breakdown =
+        add_session_outputs(*session, rs.first_sample, last.spp, range.has_value(), meta);
     try {
         if (range) {
             PartInfo part{{{range->begin, last.spp}}, scene_hash, a.seed, meta.integrator,

@@ -29,6 +29,7 @@
 #include "scene/scene.h"
 #include "scene/scene_error.h"
 #include "scene_hash.h"
+#include "session_outputs.h"
 
 namespace omega::client {
 
@@ -243,8 +244,10 @@ private:
         meta.rel_error = last.error.mean_rel_error;
         PartInfo part{{{static_cast<long long>(u.begin), last.spp}}, ls->hash, u.seed, meta.integrator,
                       sampler_name(ls->desc.integrator.sampler)};
+        // The job's AOVs and breakdown go with the unit: omegad folds them as `omega merge` does.
+        add_session_outputs(session, static_cast<long long>(u.begin), last.spp, true, meta);
         const std::string tmp = fmt::format("{}/part-{}-{}-{}.exr", cache_, ::getpid(), u.job, u.unit);
-        write_partial_exr(tmp, session.film(), meta, part);
+        write_partial_exr(tmp, session.film(), meta, part, session_aov_films(session));
         proto::UnitResult r;
         r.id = c.next_id();
         r.job = u.job;

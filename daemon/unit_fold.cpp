@@ -1,5 +1,7 @@
 #include "daemon/unit_fold.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -22,7 +24,32 @@ void init_fold(UnitFold& f, const JobPaths& jp, const std::string& name, const s
   f.sampler = sampler_name(d.integrator.sampler);
   f.seed = seed;
   f.film.emplace(f.desc);  // merge_parts starts from an empty film too
+  for (const AovDesc& a : f.desc.aovs) f.aovs.push_back({a.name, a.expr, Film(f.desc)});
 }
+
+namespace {
+
+// The unit's AOVs and breakdown, folded like its film. AOVs are part of the image the job asked
+// for: a unit without them fails the fold (and names what it holds). The breakdown is a report:
+// without its sums the job ends without one and says so.
+void fold_extras(UnitFold& f, const std::string& path, const PartialRender& p) {
+  if (format_aov_list(p.aovs) != format_aov_list(f.aovs))
+    throw std::runtime_error(path + ": the unit holds aovs [" + format_aov_list(p.aovs) + "], the job asks for [" +
+                             format_aov_list(f.aovs) + "] (a worker older than the daemon?)");
+  for (std::size_t i = 0; i < f.aovs.size(); ++i) f.aovs[i].film.merge(p.aovs[i].film);
+  if (!f.desc.breakdown || f.breakdown_dropped) return;
+  const auto it = p.meta.attributes.find("omega.breakdown_state");
+  try {
+    if (it == p.meta.attributes.end()) throw std::invalid_argument("the unit carries no omega.breakdown_state");
+    merge_breakdown_state(f.breakdown, parse_breakdown_state(it->second));
+  } catch (const std::invalid_argument& e) {
+    f.breakdown.reset();
+    f.breakdown_dropped = true;
+    f.warnings.push_back("the path-class breakdown is left out: " + path + ": " + e.what());
+  }
+}
+
+}  // namespace
 
 PartialRender check_part(const UnitFold& f, const std::string& path, std::uint64_t begin, std::uint64_t end) {
   PartialRender p = read_partial_exr(path);
@@ -53,6 +80,7 @@ FoldUpdate fold_parts(UnitFold& f, std::uint64_t job, const std::vector<std::str
         throw std::runtime_error(path + ": holds samples " + format_ranges(p.part.ranges) + ", the fold is at " +
                                  std::to_string(f.spp));
       f.film->merge(p.film);
+      fold_extras(f, path, p);
       f.spp = static_cast<std::uint64_t>(r.end);
       f.units += 1;
       f.time_s += p.meta.time_s;
@@ -74,9 +102,15 @@ FoldUpdate fold_parts(UnitFold& f, std::uint64_t job, const std::vector<std::str
   const ErrorEstimate e = f.film->estimate_error();
   if (std::isfinite(e.mean_rel_error)) snap->rel_error = e.mean_rel_error;
   snap->film = f.film->serialize();
+  for (const AovFilm& a : f.aovs) snap->aov_films.push_back(a.film.serialize());
   snap->integrator = f.integrator;
   snap->seed = f.seed;
-  if (tiles) u.tiles = encode_tiles(*f.film, tile_size, *snap);
+  if (f.breakdown) {
+    snap->breakdown = breakdown_csv(make_breakdown_report(f.breakdown->stats, f.breakdown->region, f.breakdown->max_length));
+    snap->breakdown_state = breakdown_state_text(*f.breakdown);
+    snap->breakdown_samples = fmt::format("0:{}", f.spp);
+  }
+  if (tiles) u.tiles = encode_tiles(*f.film, tile_size, *snap, f.aovs);
   u.snapshot = std::move(snap);
   u.film = f.desc;
   return u;
@@ -93,8 +127,15 @@ void write_fold_result(const UnitFold& f, const std::string& path) {
   m.warnings = f.warnings;
   const ErrorEstimate e = f.film->estimate_error();
   m.rel_error = std::isfinite(e.mean_rel_error) ? e.mean_rel_error : 0;
+  append_aov_layers(f.aovs, m);
+  if (f.breakdown) {
+    m.attributes["omega.breakdown"] =
+        breakdown_csv(make_breakdown_report(f.breakdown->stats, f.breakdown->region, f.breakdown->max_length));
+    m.attributes["omega.breakdown_samples"] = fmt::format("0:{}", f.spp);
+    m.attributes["omega.breakdown_state"] = breakdown_state_text(*f.breakdown);
+  }
   PartInfo part{{{0, static_cast<long long>(f.spp)}}, f.scene_hash, f.seed, f.integrator, f.sampler};
-  write_partial_exr(path, *f.film, m, part);
+  write_partial_exr(path, *f.film, m, part, f.aovs);
 }
 
 std::string format_asset_list(const std::vector<protocol::AssetRef>& assets) {

@@ -18,6 +18,7 @@
 #include "daemon/render_worker.h"
 #include "film/film.h"
 #include "film/partial_exr.h"
+#include "integrator/breakdown.h"
 
 namespace omega::daemon {
 
@@ -33,6 +34,12 @@ struct UnitFold {
   std::uint64_t nonfinite = 0;
   std::vector<std::string> warnings;
   std::string scene_hash;
+  // The job's light path expression outputs (desc.aovs, in that order), folded as the film is,
+  // and its breakdown's exact sums (film key `breakdown`); a unit lacking the sums (a worker
+  // older than the breakdown) leaves the job without one, with a warning.
+  std::vector<AovFilm> aovs;
+  std::optional<BreakdownState> breakdown;
+  bool breakdown_dropped = false;
 };
 
 // What one fold step gives the loop: the new image (and its tiles when someone watches).

@@ -281,4 +281,16 @@ BreakdownReport parse_breakdown_csv(const std::string& text) {
     return r;
 }
 
+void merge_breakdown_state(std::optional<BreakdownState>& all, BreakdownState s) {
+    if (!all) {
+        all = std::move(s);
+        return;
+    }
+    if (s.region != all->region || s.max_length != all->max_length)
+        throw std::invalid_argument("the parts' breakdowns differ in region or length (" + s.region + ", " +
+                                    std::to_string(s.max_length) + " against " + all->region + ", " +
+                                    std::to_string(all->max_length) + ")");
+    all->stats.merge(s.stats);
+}
+
 }  // namespace omega

@@ -116,6 +116,10 @@ struct BreakdownState {
 std::string breakdown_state_text(const BreakdownState& s);
 // Throws std::invalid_argument for text breakdown_state_text would not write.
 BreakdownState parse_breakdown_state(const std::string& text);
+// Adds part `s` to the running total `all` (empty: s becomes it). The exact sums make the result
+// bit for bit one render's of the union of the parts' samples. Throws std::invalid_argument when
+// the region or the length differ.
+void merge_breakdown_state(std::optional<BreakdownState>& all, BreakdownState s);
 
 // "region,kind,class,length,mu,mu_stderr,fraction,fraction_stderr" and one line per row.
 std::string breakdown_csv(const BreakdownReport& r);

@@ -226,12 +226,9 @@ def start_worker(addr, name, tmp, env, wrap=()):
     return p, log
 
 
-def check_units_merge(tmp, scene, job, env, unit, units):
-    """The worker tests' verdict (docs/farm.md "Workers"): the job's result equals `omega merge`
-    of the same sample ranges rendered locally bit for bit, and `omega render --spp` of the whole
-    range within the merge bound (1e-6 relative)."""
-    out = os.path.join(tmp, "out.exr")
-    omega(["fetch", str(job), "-o", out], env)
+def merge_units_locally(tmp, scene, env, unit, units):
+    """`omega merge` of the job's units rendered here with `omega render --samples A:B`: the
+    image a worker job's result must equal bit for bit. Returns its path."""
     parts = []
     for i in range(units):
         p = os.path.join(tmp, f"part{i}.exr")
@@ -239,6 +236,16 @@ def check_units_merge(tmp, scene, job, env, unit, units):
         parts.append(p)
     merged = os.path.join(tmp, "merged.exr")
     omega(["merge"] + parts + ["-o", merged, "-q"], env)
+    return merged
+
+
+def check_units_merge(tmp, scene, job, env, unit, units):
+    """The worker tests' verdict (docs/farm.md "Workers"): the job's result equals `omega merge`
+    of the same sample ranges rendered locally bit for bit, and `omega render --spp` of the whole
+    range within the merge bound (1e-6 relative)."""
+    out = os.path.join(tmp, "out.exr")
+    omega(["fetch", str(job), "-o", out], env)
+    merged = merge_units_locally(tmp, scene, env, unit, units)
     r = subprocess.run([EXR_COMPARE, merged, out], capture_output=True, text=True)
     assert r.returncode == 0, "result differs from omega merge of the same units: " + r.stdout + r.stderr
     local = os.path.join(tmp, "local.exr")

@@ -8,10 +8,11 @@ Usage: python3 test_workers.py OMEGAD OMEGA EXR_COMPARE SOURCE_DIR"""
 import os
 import re
 import signal
+import subprocess
 import time
 
-from harness import (SLOWDOWN, Daemon, Test, check_units_merge, free_port, omega, op, small_cornell, start_worker,
-                     tcp_env, wait_file, wait_state)
+from harness import (EXR_COMPARE, SLOWDOWN, Daemon, Test, check_units_merge, free_port, merge_units_locally, omega, op,
+                     small_cornell, start_worker, tcp_env, wait_file, wait_state)
 
 ALICE, BOB, WORKER = "alice-token-0123456789", "bob-token-0123456789", "worker-token-0123456789"
 CONFIG = f"""tcp_users:
@@ -145,8 +146,40 @@ def test_cancel_and_pause_reach_workers(tmp, daemons):
         p.wait(10)
 
 
+def test_aovs_and_breakdown_fold_exactly(tmp, daemons):
+    """A worker job with light path expression outputs and a breakdown: the workers' units carry
+    both, and the daemon folds them as `omega merge` does, bit for bit (they were dropped before)."""
+    d = Daemon(tmp, config=CONFIG, threads=1).start()
+    daemons.append(d)
+    addr = d.tcp
+    unit, units = 8, 3
+    scene = os.path.join(tmp, "scene.yaml")
+    text = small_cornell(40, 30, unit * units).decode()
+    text, n = re.subn(r"(film: \{width: \d+, height: \d+)", r'\1, aov: {direct: "L D E"}, breakdown: {length: 4}', text)
+    assert n == 1, text
+    with open(scene, "w") as f:
+        f.write(text)
+    alice = tcp_env(addr, "alice", ALICE)
+    job = int(omega(["submit", scene, "--spp", str(unit * units), "--workers", "1", "--unit-spp", str(unit), "-q"],
+                    alice).stdout.split()[-1])
+    p, _ = start_worker(addr, "D", tmp, tcp_env(addr, "farm", WORKER))
+    try:
+        info = wait_state(login(d, "alice", ALICE), job, {"done", "failed"}, 120)
+        assert info["state"] == "done", info
+    finally:
+        p.kill()
+        p.wait(10)
+    out = os.path.join(tmp, "out.exr")
+    omega(["fetch", str(job), "-o", out], alice)
+    merged = merge_units_locally(tmp, scene, alice, unit, units)
+    r = subprocess.run([EXR_COMPARE, "--layer", "aov.direct", "--layer", "aov.direct.var", "--attr", "omega.breakdown",
+                        "--attr", "omega.breakdown_state", merged, out], capture_output=True, text=True)
+    assert r.returncode == 0, "the job's AOV or breakdown differs from omega merge of its units: " + r.stdout + r.stderr
+
+
 if __name__ == "__main__":
     t = Test()
+    t.run(test_aovs_and_breakdown_fold_exactly)
     t.run(test_workers_exact_through_deaths)
     t.run(test_cancel_and_pause_reach_workers)
     t.exit()
