@@ -392,20 +392,25 @@ int run_converge(const ConvergeArgs& a) {
             size_t next = 0;
             double overhead = 0;  // snapshot time, not counted as render time
             std::vector<std::pair<Sample, OIIO::ImageBuf>> snaps;
-            session->run([&](const PassReport& r) {
-                if (next >= times.size() || r.elapsed_s < times[next]) return;
+            // final: the run's last report, which stands for every checkpoint not yet reached (a
+            // time halt ends the run a little before its budget by the session's own clock, and
+            // on a loaded machine that last checkpoint then had no row).
+            auto record = [&](const PassReport& r, bool final) {
+                if (next >= times.size() || (!final && r.elapsed_s < times[next])) return;
                 auto t0 = std::chrono::steady_clock::now();
                 Sample s;
                 s.run = run;
                 s.seed = rs.seed;
-                while (next < times.size() && r.elapsed_s >= times[next]) s.target = times[next++];
+                while (next < times.size() && (final || r.elapsed_s >= times[next])) s.target = times[next++];
                 s.spp = r.spp;
                 s.time_s = r.elapsed_s - overhead;
                 if (variance_mode) s.relvar = film_relvar(session->film());
                 if (classes) classes->record(*session, {name, run, rs.seed, s.target, s.time_s, s.spp, 0, {}, {}});
                 snaps.emplace_back(s, variance_mode ? OIIO::ImageBuf() : film_image(session->film()));
                 overhead += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            });
+            };
+            const PassReport fin = session->run([&](const PassReport& r) { record(r, false); });
+            if (fin.pass > 0 && !session->aborted()) record(fin, true);
             for (auto& [s, img] : snaps) {
                 if (!variance_mode) s.err = image_error(img, ref);
                 samples.push_back(s);
