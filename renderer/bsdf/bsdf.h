@@ -145,6 +145,12 @@ inline bool bsdf_is_delta_only(const Bsdf& b) {
     return l != kLobeNone && (l & (kLobeDiffuse | kLobeGlossy)) == 0;
 }
 inline bool bsdf_has_nondelta(const Bsdf& b) { return bsdf_lobes(b) & (kLobeDiffuse | kLobeGlossy); }
+// Whether bsdf_sample() reads its 1D number `uc` (a choice between lobes): diffuse and
+// conductor models have one lobe and ignore it.
+inline bool bsdf_sample_uses_uc(const Bsdf& b) {
+    return std::holds_alternative<DielectricBsdf>(b) || std::holds_alternative<PlasticBsdf>(b) ||
+           std::holds_alternative<ThinDielectricBsdf>(b);
+}
 
 // Textured parameters, resolved at one surface point: the BSDF models never see a texture.
 // Returns `b` itself when nothing in it is textured (no copy: the common case costs one test),

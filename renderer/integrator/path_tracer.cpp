@@ -27,7 +27,7 @@ Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const
                               Sampler& sampler, TracerStats& stats) const {
     const auto& sel = scene_.light_selection();
     if (sel.empty()) return Rgb(0.f);
-    float u_sel = sampler.next_1d();
+    float u_sel = sampler.next_1d_if(sel.size() > 1);  // one light: nothing to choose
     Vec2 u = sampler.next_2d();
     size_t li = sel.sample(u_sel);
     float pmf = sel.pmf(li);
@@ -150,7 +150,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
         }
 
         sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
-        float uc = sampler.next_1d();
+        float uc = sampler.next_1d_if(bsdf_sample_uses_uc(bsdf));
         Vec2 u = sampler.next_2d();
         auto bs = bsdf_sample(bsdf, wo_local, uc, u, TransportMode::Radiance);
         if (!bs || is_black(bs->weight)) break;

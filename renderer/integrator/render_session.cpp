@@ -121,7 +121,10 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
     const size_t wave = std::max(size_t(4 * arena.max_concurrency()), kWavePixels / tile_area);
     for (size_t w0 = 0; w0 < tiles.size() && !aborted(); w0 += wave) {
         const size_t w1 = std::min(tiles.size(), w0 + wave);
-        std::vector<std::vector<Splat>> tile_splats(w1 - w0);
+        // Capacity kept from batch to batch: the tiles' splat lists are rebuilt every batch.
+        std::vector<BandedSplats>& tile_splats = banded_tiles_;
+        tile_splats.resize(w1 - w0);
+        for (auto& t : tile_splats) t.clear();
         std::vector<std::vector<StrategyContribution>> tile_strategy_splats(strategies_ ? w1 - w0 : 0);
         arena.execute([&] {
             tbb::parallel_for(
@@ -130,6 +133,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                     TracerStats& st = stats_.local();
                     BdptScratch& scratch = scratch_.local();
                     std::vector<Splat>& local = sample_splats_.local();
+                    std::vector<Splat>& out = tile_raw_splats_.local();
                     std::vector<StrategyContribution>* per = strategies_ ? &sample_strategies_.local() : nullptr;
                     for (size_t ti = range.begin(); ti != range.end(); ++ti) {
                         bool ran_tile = false;
@@ -138,7 +142,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                             ran_tile = true;
                             ran[ti] = 1;
                             const Rect& tile = tiles[ti];
-                            auto& out = tile_splats[ti - w0];
+                            out.clear();
                             for (int y = tile.y0; y < tile.y1; ++y)
                                 for (int x = tile.x0; x < tile.x1; ++x) {
                                     uint64_t pixel = uint64_t(y) * width + uint64_t(x);
@@ -171,6 +175,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                                             else strategies_->add_camera(x, y, c);
                                         }
                                 }
+                            bands_->bucket(out, tile_splats[ti - w0]);
                         });
                         if (!ran_tile) return;
                     }

@@ -1,20 +1,22 @@
 #pragma once
 // Light tracing and BDPT splat across the whole film, so one batch's splats used to be merged
 // on the driver thread alone: 10% of a BDPT render on 1 thread, and a serial section that caps
-// the speedup on a many-core machine. Here the crop is cut into bands of rows; each splat is
-// listed, in merge order, under every band its filter footprint reaches, and the bands are
-// merged in parallel. A pixel belongs to one band and receives its splats in the serial order
+// the speedup on a many-core machine. Here the crop is cut into bands of rows; each tile's
+// splats are copied, in their order, under every band their filter footprint reaches (by the
+// worker that made them), and the bands are merged in parallel. A pixel belongs to one band and receives its splats in the serial order
 // (tile order, then the order within a tile), so the sums are bit-identical to the serial merge
 // and to any thread count.
 //
 // Concurrency: merge() and for_each_band() are called on the driver thread, inside nothing; the
-// callbacks run on the arena's workers, never two at once for the same pixel.
+// callbacks run on the arena's workers, never two at once for the same pixel. bucket() is
+// const and writes only its `out`: any worker, one tile each.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "film/film.h"
@@ -23,13 +25,24 @@
 
 namespace omega {
 
+// One tile's splats as SplatBands::bucket() lists them: those reaching band b are
+// by_band[start[b] .. start[b + 1]), in the tile's order (a splat spanning two bands is in both).
+struct BandedSplats {
+    std::vector<Splat> by_band;
+    std::vector<uint32_t> start;  // bands() + 1 entries; empty for a tile that did not run
+    void clear() {
+        by_band.clear();
+        start.clear();
+    }
+};
+
 class SplatBands {
 public:
     SplatBands(const Rect& crop, float filter_radius, int band_rows = kBandRows)
         : crop_(crop), radius_(filter_radius), rows_(std::max(1, band_rows)),
-          lists_(size_t(std::max(1, (crop.height() + rows_ - 1) / rows_))) {}
+          bands_(size_t(std::max(1, (crop.height() + rows_ - 1) / rows_))) {}
 
-    size_t bands() const { return lists_.size(); }
+    size_t bands() const { return bands_; }
     // Rows [y0, y1) of band b, as a rect of the crop.
     Rect band(size_t b) const {
         Rect r = crop_;
@@ -48,25 +61,45 @@ public:
         });
     }
 
-    // fn(splat, x, y, filter_weight) for every crop pixel each splat of `tiles` reaches.
+    // Any thread: lists one tile's splats (in their order) under every band their filter
+    // footprint reaches, into `out`. The workers do this while a tile's splats are still in
+    // their cache, so merge() reads each band's splats as contiguous runs: with pointers into
+    // the tiles' lists, nearly every splat the merge read was a cache miss on a large film.
+    void bucket(const std::vector<Splat>& splats, BandedSplats& out) const {
+        const size_t n = bands();
+        out.start.assign(n + 1, 0);
+        // Counts shifted by one, so the prefix sums below turn them into each band's start.
+        for (const Splat& sp : splats) {
+            const auto [b0, b1] = band_span(sp);
+            for (int b = b0; b <= b1; ++b) ++out.start[size_t(b) + 1];
+        }
+        for (size_t b = 0; b < n; ++b) out.start[b + 1] += out.start[b];
+        out.by_band.resize(out.start[n]);
+        // Each band's start serves as its write position, which then ends at the next band's
+        // start; one shift puts the starts back.
+        for (const Splat& sp : splats) {
+            const auto [b0, b1] = band_span(sp);
+            for (int b = b0; b <= b1; ++b) out.by_band[out.start[size_t(b)]++] = sp;
+        }
+        for (size_t b = n; b > 0; --b) out.start[b] = out.start[b - 1];
+        out.start[0] = 0;
+    }
+
+    // fn(splat, x, y, filter_weight) for every crop pixel each splat of `tiles` (bucketed by
+    // bucket(), in merge order) reaches.
     template <class Fn>
-    void merge(tbb::task_arena& arena, const Filter& filter, const std::vector<std::vector<Splat>>& tiles, Fn&& fn) {
-        for (auto& l : lists_) l.clear();
-        for (const auto& list : tiles)
-            for (const Splat& sp : list) {
-                // The rows for_each_filter_pixel visits, as bands.
-                const int ya = std::max(crop_.y0, int(std::floor(sp.film.y - radius_ - 0.5f)));
-                const int yb = std::min(crop_.y1 - 1, int(std::ceil(sp.film.y + radius_ - 0.5f)));
-                if (ya > yb) continue;
-                for (int b = (ya - crop_.y0) / rows_, e = (yb - crop_.y0) / rows_; b <= e; ++b)
-                    lists_[size_t(b)].push_back(&sp);
-            }
+    void merge(tbb::task_arena& arena, const Filter& filter, const std::vector<BandedSplats>& tiles, Fn&& fn) const {
         arena.execute([&] {
             tbb::parallel_for(tbb::blocked_range<size_t>(0, bands(), 1), [&](const tbb::blocked_range<size_t>& r) {
                 for (size_t b = r.begin(); b != r.end(); ++b) {
                     const Rect rows = band(b);
-                    for (const Splat* sp : lists_[b])
-                        for_each_filter_pixel(filter, rows, sp->film, [&](int x, int y, double f) { fn(*sp, x, y, f); });
+                    for (const BandedSplats& t : tiles) {
+                        if (t.start.size() != bands() + 1) continue;  // a tile that did not run
+                        for (uint32_t k = t.start[b], e = t.start[b + 1]; k < e; ++k) {
+                            const Splat& sp = t.by_band[k];
+                            for_each_filter_pixel(filter, rows, sp.film, [&](int x, int y, double f) { fn(sp, x, y, f); });
+                        }
+                    }
                 }
             });
         });
@@ -78,7 +111,15 @@ private:
     Rect crop_;
     float radius_;
     int rows_;
-    std::vector<std::vector<const Splat*>> lists_;  // per band, in merge order
+    // The bands a splat's filter footprint reaches (b0 > b1: none), as for_each_filter_pixel
+    // visits its rows.
+    std::pair<int, int> band_span(const Splat& sp) const {
+        const int ya = std::max(crop_.y0, int(std::floor(sp.film.y - radius_ - 0.5f)));
+        const int yb = std::min(crop_.y1 - 1, int(std::ceil(sp.film.y + radius_ - 0.5f)));
+        if (ya > yb) return {1, 0};
+        return {(ya - crop_.y0) / rows_, (yb - crop_.y0) / rows_};
+    }
+    size_t bands_;
 };
 
 }  // namespace omega

@@ -217,7 +217,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         const auto& sel = scene.light_selection();
         if (sel.empty()) return std::nullopt;
         sampler.start_dimension(dims::connect_light(t));
-        size_t li = sel.sample(sampler.next_1d());
+        size_t li = sel.sample(sampler.next_1d_if(sel.size() > 1));
         double pmf = sel.pmf(li);
         const Light& l = scene.lights()[li];
         auto ls = light_sample_li(scene, l, z.p(), sampler.next_2d());

@@ -103,7 +103,7 @@ std::optional<LightChain> sample_light_chain(const Scene& scene, const PlanarMir
                                              TracerStats& stats) {
     const auto& sel = scene.light_selection();
     if (sel.empty() || !mirror.usable_from(x.p)) return std::nullopt;
-    const float u_sel = sampler.next_1d();
+    const float u_sel = sampler.next_1d_if(sel.size() > 1);
     const Vec2 u = sampler.next_2d();
     const size_t li = sel.sample(u_sel);
     const float pmf = sel.pmf(li);

@@ -137,7 +137,7 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
             return mode == TransportMode::Radiance ? dims::camera_walk(j, slot) : dims::light_walk(j, slot);
         };
         sampler.start_dimension(block(dims::kScatter));
-        float uc = sampler.next_1d();
+        float uc = sampler.next_1d_if(bsdf_sample_uses_uc(*cur.bsdf));
         Vec2 u = sampler.next_2d();
         Bsdf textured;  // v.bsdf is the scene's material; textures are looked up at the hit's uv
         auto bs = bsdf_sample(resolve_bsdf(*cur.bsdf, cur.hit.uv, textured), wo_local, uc, u, mode);
@@ -263,7 +263,7 @@ int generate_light_subpath(const Scene& scene, const WalkLimits& lim, Sampler& s
     const auto& sel = scene.light_selection();
     if (sel.empty() || lim.max_vertices <= 0) return 0;
     sampler.start_dimension(dims::kEmit);
-    float u_sel = sampler.next_1d();
+    float u_sel = sampler.next_1d_if(sel.size() > 1);
     Vec2 u_pos = sampler.next_2d();
     Vec2 u_dir = sampler.next_2d();
     size_t li = sel.sample(u_sel);

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "chi2.h"
 #include "sampling/rng.h"
 
@@ -61,6 +64,34 @@ TEST(DiscreteDistribution, HarnessRejectsWrongPmf) {
     std::vector<double> expected = {1.1, 2, 3, 4};
     for (double& e : expected) e *= 200'000 / 10.1;
     EXPECT_FALSE(test::chi2_from_counts(observed, expected, 0.01, 1).passed);
+}
+
+// Small distributions are searched by a scan, larger ones by binary search: both must pick the
+// entry upper_bound picks, at item boundaries too.
+TEST(DiscreteDistribution, ScanAndBinarySearchPickTheSameItem) {
+    Rng rng(17, 0);
+    for (size_t n = 1; n <= 12; ++n) {
+        std::vector<double> w(n);
+        for (size_t i = 0; i < n; ++i) w[i] = (i % 3 == 1) ? 0.0 : 0.1 + rng.next_1d();
+        if (n == 1) w[0] = 1;
+        DiscreteDistribution d(w);
+        double sum = 0;
+        for (double x : w) sum += x;
+        std::vector<double> cdf(n);
+        double acc = 0;
+        for (size_t i = 0; i < n; ++i) cdf[i] = acc += w[i] / sum;
+        cdf.back() = 1.0;
+        std::vector<float> us;
+        for (int k = 0; k < 1000; ++k) us.push_back(rng.next_1d());
+        for (double c : cdf) us.push_back(float(c)), us.push_back(std::nextafter(float(c), 0.f));
+        us.push_back(0.f);
+        for (float u : us) {
+            if (!(u < 1.f)) continue;
+            size_t want = size_t(std::min<ptrdiff_t>(std::upper_bound(cdf.begin(), cdf.end(), double(u)) - cdf.begin(), ptrdiff_t(n) - 1));
+            while (w[want] == 0 && want > 0) --want;
+            ASSERT_EQ(d.sample(u), want) << "n " << n << " u " << u;
+        }
+    }
 }
 
 TEST(DiscreteDistribution, DegenerateInputs) {

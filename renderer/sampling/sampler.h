@@ -163,6 +163,20 @@ public:
         return sobol::to_unit(sobol::reverse_bits(sobol::laine_karras(i, uint32_t(h >> 32))));
     }
 
+    // A 1D decision this scene cannot need (one light to choose, one lobe): the sobol sampler
+    // just moves past its dimension, which it would have hashed and scrambled for nothing; the
+    // independent one still draws, so its stream, and every image made with it, stays as it was.
+    void skip_1d() {
+        if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) rng_.next_1d();
+        else ++dim_;
+    }
+    // next_1d() where the decision is `needed`, else skip_1d() and 0.
+    float next_1d_if(bool needed) {
+        if (needed) return next_1d();
+        skip_1d();
+        return 0.f;
+    }
+
     Vec2 next_2d() {
         if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) {
             float a = rng_.next_1d();

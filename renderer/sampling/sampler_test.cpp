@@ -189,6 +189,29 @@ TEST(IndependentSampler, IsTheOldPcgStream) {
     }
 }
 
+// A skipped decision must leave every later draw as a drawn one would: integrators skip the
+// draws a scene cannot need (one light, one lobe), and images must not change with that.
+TEST(Sampler, SkippingADrawLeavesTheLaterDrawsAsTheyWere) {
+    for (SamplerType type : {SamplerType::Sobol, SamplerType::Independent})
+        for (uint32_t dim : {dims::camera_walk(2, dims::kDirect), dims::kBeyond})
+            for (uint64_t index : {0ull, 5ull, 1ull << 33}) {
+                Sampler drawn = Sampler::make(type, 3, 77, index), skipped = drawn;
+                drawn.start_dimension(dim);
+                skipped.start_dimension(dim);
+                (void)drawn.next_1d();
+                EXPECT_EQ(skipped.next_1d_if(false), 0.f);
+                const Vec2 a = drawn.next_2d(), b = skipped.next_2d();
+                EXPECT_EQ(a.x, b.x);
+                EXPECT_EQ(a.y, b.y);
+                EXPECT_EQ(drawn.next_1d(), skipped.next_1d());
+                // And a needed one is the plain draw.
+                Sampler c = Sampler::make(type, 3, 77, index), d = c;
+                c.start_dimension(dim);
+                d.start_dimension(dim);
+                EXPECT_EQ(c.next_1d(), d.next_1d_if(true));
+            }
+}
+
 TEST(SamplerType, Names) {
     EXPECT_STREQ(sampler_name(SamplerType::Sobol), "sobol");
     EXPECT_EQ(sampler_from_name("independent"), SamplerType::Independent);

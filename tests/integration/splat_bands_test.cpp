@@ -42,8 +42,14 @@ TEST(SplatBands, ParallelMergeIsBitIdenticalToTheSerialOne) {
             for (int rows : {1, 3, 8, 64}) {
                 tbb::task_arena arena(threads);
                 SplatBands bands(crop, filter.radius(), rows);
+                // Bucketed as the workers do, one tile at a time, into lists reused from a
+                // larger earlier batch (stale capacity must not leak into the sums).
+                std::vector<BandedSplats> bucketed(tiles.size());
+                for (size_t t = 0; t < tiles.size(); ++t) bands.bucket(tiles[(t + 3) % tiles.size()], bucketed[t]);
+                for (size_t t = 0; t < tiles.size(); ++t) bands.bucket(tiles[t], bucketed[t]);
+                bucketed.emplace_back();  // a tile that did not run: no lists, nothing merged
                 std::vector<Vec3d> banded(size_t(crop.area()), Vec3d(0.0));
-                bands.merge(arena, filter, tiles,
+                bands.merge(arena, filter, bucketed,
                             [&](const Splat& sp, int x, int y, double f) { banded[at(x, y)] += Vec3d(sp.value) * f; });
                 ASSERT_EQ(0, std::memcmp(serial.data(), banded.data(), serial.size() * sizeof(Vec3d)))
                     << "filter " << int(type) << " threads " << threads << " band rows " << rows;
