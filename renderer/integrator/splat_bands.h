@@ -3,9 +3,9 @@
 // on the driver thread alone: 10% of a BDPT render on 1 thread, and a serial section that caps
 // the speedup on a many-core machine. Here the crop is cut into bands of rows; each tile's
 // splats are copied, in their order, under every band their filter footprint reaches (by the
-// worker that made them), and the bands are merged in parallel. A pixel belongs to one band and receives its splats in the serial order
-// (tile order, then the order within a tile), so the sums are bit-identical to the serial merge
-// and to any thread count.
+// worker that made them), and the bands are merged in parallel. A pixel belongs to one band and
+// receives its splats in the serial order (tile order, then the order within a tile), so the
+// sums are bit-identical to the serial merge and to any thread count.
 //
 // Concurrency: merge() and for_each_band() are called on the driver thread, inside nothing; the
 // callbacks run on the arena's workers, never two at once for the same pixel. bucket() is
