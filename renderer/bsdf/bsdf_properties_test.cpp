@@ -450,6 +450,31 @@ TEST(BsdfProperties, LobeFlags) {
     EXPECT_FALSE(bsdf_is_delta_only(plastic(0)));
 }
 
+// Integrators skip the lobe number of a BSDF that bsdf_sample_uses_uc() says ignores it (it gets
+// 0): that must hold, or such a BSDF would always take one lobe. And one that reads it must be
+// listed, or the skip would bias it.
+TEST(BsdfProperties, UsesUcSaysWhichModelsReadTheLobeNumber) {
+    std::vector<Named> models = rough_models();
+    models.push_back({"smooth_conductor", ConductorBsdf{}});
+    models.push_back({"smooth_dielectric", DielectricBsdf{}});
+    models.push_back({"smooth_plastic", plastic(0)});
+    models.push_back({"thin_dielectric", ThinDielectricBsdf{}});
+    models.push_back({"black", BlackBsdf{}});
+    for (const Named& m : models) {
+        bool differs = false;
+        for (int k = 0; k < 64 && !differs; ++k) {
+            const Vec3 wo = dir(k % 2 ? 0.8f : -0.4f, 0.1f * float(k));
+            const Vec2 u{(float(k) + 0.5f) / 64.f, float((k * 37) % 64) / 64.f};
+            auto a = bsdf_sample(m.bsdf, wo, 0.f, u, kRad);
+            for (float uc : {0.3f, 0.6f, 0.97f}) {
+                auto b = bsdf_sample(m.bsdf, wo, uc, u, kRad);
+                differs = differs || a.has_value() != b.has_value() || (a && (a->wi != b->wi || a->lobe != b->lobe));
+            }
+        }
+        EXPECT_EQ(differs, bsdf_sample_uses_uc(m.bsdf)) << m.name;
+    }
+}
+
 // ---- Plastic (Tungsten's model, plastic.cpp)
 
 TEST(PlasticBsdf, InternalReflectanceByQuadrature) {

@@ -94,7 +94,7 @@ public:
                 for (size_t b = r.begin(); b != r.end(); ++b) {
                     const Rect rows = band(b);
                     for (const BandedSplats& t : tiles) {
-                        if (t.start.size() != bands() + 1) continue;  // a tile that did not run
+                        if (t.start.empty()) continue;  // a tile that did not run
                         for (uint32_t k = t.start[b], e = t.start[b + 1]; k < e; ++k) {
                             const Splat& sp = t.by_band[k];
                             for_each_filter_pixel(filter, rows, sp.film, [&](int x, int y, double f) { fn(sp, x, y, f); });

@@ -74,6 +74,13 @@ TEST(DiscreteDistribution, ScanAndBinarySearchPickTheSameItem) {
         std::vector<double> w(n);
         for (size_t i = 0; i < n; ++i) w[i] = (i % 3 == 1) ? 0.0 : 0.1 + rng.next_1d();
         if (n == 1) w[0] = 1;
+        // Even n: integer weights summing to 32 put the cdf on floats, so u lands exactly on
+        // item boundaries, where only a strict comparison picks upper_bound's item.
+        if (n % 2 == 0) {
+            double partial = 0;
+            for (size_t i = 0; i + 1 < n; ++i) partial += w[i] = (i % 3 == 1) ? 0.0 : double(1 + i % 4);
+            w[n - 1] = 32.0 - partial;  // the sum is 32
+        }
         DiscreteDistribution d(w);
         double sum = 0;
         for (double x : w) sum += x;
