@@ -19,7 +19,7 @@ namespace fs = std::filesystem;
 
 const char* kScene = "omega: 1\nlights: [{type: constant, radiance: 1}]\n";
 
-std::string parse_error(const TempDir& d, const std::string& m) { return test::manifest_parse_error(d, m); }
+using test::parse_error;
 
 TEST(BatchManifest, ExpandsFramesAndMatrixWithDefaults) {
     TempDir d;

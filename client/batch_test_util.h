@@ -12,7 +12,7 @@ namespace omega::client::test {
 
 // The message parse_manifest gives for `manifest` (written to m.yaml in d), without the path
 // prefix; "(accepted)" when it parses. A refusal must carry the bad-input exit code.
-inline std::string manifest_parse_error(const TempDir& d, const std::string& manifest) {
+inline std::string parse_error(const TempDir& d, const std::string& manifest) {
     const auto p = d.write("m.yaml", manifest);
     try {
         parse_manifest(p.string());

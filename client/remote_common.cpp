@@ -68,10 +68,6 @@ double progress_fraction(const protocol::ProgressInfo& p, const protocol::Halt& 
     return f < 0 ? -1 : std::min(f, 1.0);
 }
 
-bool is_terminal(protocol::JobState s) {
-    return s == protocol::JobState::done || s == protocol::JobState::failed || s == protocol::JobState::cancelled;
-}
-
 std::string format_table(const std::vector<std::vector<std::string>>& rows) {
     std::vector<size_t> w;
     for (const auto& r : rows)

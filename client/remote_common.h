@@ -31,7 +31,7 @@ std::string format_progress(const protocol::ProgressInfo& p, const protocol::Hal
 // Fraction done for a progress bar, or -1 when unknown (time or error halts without spp).
 double progress_fraction(const protocol::ProgressInfo& p, const protocol::Halt& h);
 
-bool is_terminal(protocol::JobState s);
+using protocol::is_terminal;
 
 // Left-aligned columns separated by two spaces; the first row is the heading.
 std::string format_table(const std::vector<std::vector<std::string>>& rows);

@@ -19,7 +19,7 @@ using test::TempDir;
 namespace fs = std::filesystem;
 using namespace omega::client::slurm;
 
-std::string parse_error(const TempDir& d, const std::string& m) { return test::manifest_parse_error(d, m); }
+using test::parse_error;
 
 TEST(SlurmManifest, ParsesTheSlurmKeys) {
     TempDir d;

@@ -124,9 +124,7 @@ void Server::recover_jobs() {
   // are folded again from their files (server_workers.cpp).
   store_->requeue_running_units();
   for (const JobRecord& r : store_->all()) {
-    if (r.workers == 0 || r.state == protocol::JobState::done || r.state == protocol::JobState::failed ||
-        r.state == protocol::JobState::cancelled)
-      continue;
+    if (r.workers == 0 || protocol::is_terminal(r.state)) continue;
     try {
       load_work_job(r);
     } catch (const std::exception& e) {

@@ -17,10 +17,6 @@ using protocol::ErrorCode;
 using protocol::JobState;
 using protocol::MessageType;
 
-namespace {
-bool finished(JobState s) { return s == JobState::done || s == JobState::failed || s == JobState::cancelled; }
-}  // namespace
-
 void Server::reply_error(Connection& c, std::uint64_t id, ErrorCode code, const std::string& msg) {
   protocol::Error e;
   e.id = id;
@@ -363,7 +359,7 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
     // The store before the worker: if the write throws (SQLite locked), nothing has changed and
     // handle_frame answers with an error frame; the job renders on as before.
     case MessageType::cancel:
-      if (finished(r->state)) return bad_state();
+      if (protocol::is_terminal(r->state)) return bad_state();
       store_->set_state(job, JobState::cancelled);
       if (live) running->second.worker->request_stop(StopKind::cancel);
       if (is_worker_job(job)) {
@@ -393,14 +389,14 @@ void Server::on_job_request(Connection& c, MessageType t, std::uint64_t id, std:
       log_.info("job {}: resumed by {}", job, c.user);
       break;
     case MessageType::set_priority:
-      if (finished(r->state)) return bad_state();
+      if (protocol::is_terminal(r->state)) return bad_state();
       store_->set_priority(job, *priority);
       share_.set_weight(job, share_weight(*priority));  // a running job's share changes at once
       log_.info("job {}: priority {} -> {} by {}", job, r->priority, *priority, c.user);
       break;
     case MessageType::delete_job: {
       if (live) return reply_error(c, id, ErrorCode::invalid_state, "delete: job " + std::to_string(job) + " is still stopping; cancel it and retry");
-      if (!finished(r->state)) publisher_.done(job, JobState::cancelled, r->progress, std::string("deleted"));
+      if (!protocol::is_terminal(r->state)) publisher_.done(job, JobState::cancelled, r->progress, std::string("deleted"));
       if (is_worker_job(job)) {
         stop_units(job, "deleted");
         work_.erase(job);
@@ -430,7 +426,7 @@ void Server::on_subscribe(Connection& c, std::uint64_t id, std::uint64_t job) {
   std::shared_ptr<const FilmSnapshot> snap = latest_snapshot(job);
   auto subscribe_now = [this, job, id, conn = c.id()](const JobRecord& rec) {
     if (!find(conn)) return;
-    if (finished(rec.state)) {
+    if (protocol::is_terminal(rec.state)) {
       publisher_.done(job, rec.state, rec.progress, rec.message.empty() ? std::nullopt : std::optional(rec.message));
     } else {
       publisher_.progress(job, rec.state, rec.progress);

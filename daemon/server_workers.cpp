@@ -21,8 +21,6 @@ using protocol::JobState;
 
 namespace {
 
-bool finished(JobState s) { return s == JobState::done || s == JobState::failed || s == JobState::cancelled; }
-
 // Any thread: renames and fsyncs the directory, so the new name survives a crash.
 void rename_durable(const std::string& from, const std::string& to) {
   fs::rename(from, to);
@@ -418,7 +416,7 @@ void Server::on_work_done(std::uint64_t job, std::uint64_t spp, const std::strin
   work_.erase(it);
   stop_slurm_workers(job, error.empty() ? "job done" : "job failed");
   std::optional<JobRecord> r = store_->get(job);
-  if (!r || finished(r->state)) return;
+  if (!r || protocol::is_terminal(r->state)) return;
   protocol::ProgressInfo p = r->progress;
   p.samples_per_s = 0;
   if (error.empty()) p.spp = spp;
@@ -505,7 +503,7 @@ protocol::JobInfo Server::job_info(const JobRecord& r) const {
     if (!wi.units.empty()) rate += wi.samples_per_s;
     i.workers.push_back(std::move(wi));
   }
-  if (!finished(r.state)) i.progress.samples_per_s = rate;
+  if (!protocol::is_terminal(r.state)) i.progress.samples_per_s = rate;
   return i;
 }
 

@@ -41,6 +41,8 @@ enum class AuthMethod { none, peer, hmac_sha256 };
 enum class JobState { queued, running, paused, done, failed, cancelled };
 std::string_view to_string(AuthMethod a);
 std::string_view to_string(JobState s);
+// done, failed or cancelled: a job in one of these states never runs again.
+constexpr bool is_terminal(JobState s) { return s == JobState::done || s == JobState::failed || s == JobState::cancelled; }
 
 bool is_sha256_hex(std::string_view s);  // 64 lowercase hex digits
 bool is_lower_hex(std::string_view s);

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "film/film.h"
+#include "film/test_util.h"
 #include "shared_data.h"
 #include "sampling/rng.h"
 
@@ -34,14 +35,7 @@ private:
     fs::path path_;
 };
 
-FilmDesc cropped(int w, int h, int x0, int y0, int x1, int y1) {
-    FilmDesc d;
-    d.width = w;
-    d.height = h;
-    d.has_crop = true;
-    d.crop = {x0, y0, x1, y1};
-    return d;
-}
+using test::cropped;
 
 Film make_film() {
     Film f(cropped(13, 9, 2, 3, 11, 8));

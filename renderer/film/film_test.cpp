@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "film/test_util.h"
 #include "sampling/rng.h"
 
 namespace omega {
@@ -20,12 +21,7 @@ FilmDesc desc(int w, int h) {
     return d;
 }
 
-FilmDesc cropped(int w, int h, int x0, int y0, int x1, int y1) {
-    FilmDesc d = desc(w, h);
-    d.has_crop = true;
-    d.crop = {x0, y0, x1, y1};
-    return d;
-}
+using test::cropped;
 
 // Two-pass mean and unbiased sample variance in long double, the reference for Welford.
 void two_pass(const std::vector<double>& v, long double& mean, long double& var) {

@@ -13,16 +13,6 @@ PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings) :
     }
 }
 
-namespace {
-
-// A direction counts as leaving on the side the shading frame says only if the geometric normal
-// agrees; otherwise interpolated normals would leak light through surfaces.
-inline bool consistent_side(const Vec3& w_world, const Vec3& ng, float cos_shading) {
-    return dot(w_world, ng) * cos_shading > 0;
-}
-
-}  // namespace
-
 Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,
                               Sampler& sampler, TracerStats& stats) const {
     const auto& sel = scene_.light_selection();

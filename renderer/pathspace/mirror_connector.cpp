@@ -51,9 +51,6 @@ Rgb reflection_weight(const Scene& scene, const SurfaceHit& hit, const Vec3& wo,
     return bs->weight;
 }
 
-inline bool consistent_side(const Vec3& w_world, const Vec3& ng, float cos_shading) {
-    return dot(w_world, ng) * cos_shading > 0;
-}
 
 }  // namespace
 

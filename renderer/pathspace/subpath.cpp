@@ -18,7 +18,6 @@ float shading_correction(const PathVertex& v, const Vec3& wo, const Vec3& wi) {
     return den > 0 ? num / den : 0.f;
 }
 
-bool consistent_side(const Vec3& w_world, const Vec3& ng, float cos_shading) { return dot(w_world, ng) * cos_shading > 0; }
 
 // Density with which the walk's last vertex, arriving from v, generates its predecessor.
 double density_back(const Scene&, const std::vector<PathVertex>& path, const PathVertex& v) {

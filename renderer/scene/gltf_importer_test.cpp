@@ -34,7 +34,7 @@ void expect_vec(const Vec3d& a, const Vec3d& b, double eps) {
     EXPECT_NEAR(a.y, b.y, eps);
     EXPECT_NEAR(a.z, b.z, eps);
 }
-void expect_rgb(const Rgb& a, double r, double g, double b, double rel = 1e-5) {
+void expect_rgb_near(const Rgb& a, double r, double g, double b, double rel = 1e-5) {
     EXPECT_NEAR(a.x, r, rel * std::max(1.0, r));
     EXPECT_NEAR(a.y, g, rel * std::max(1.0, g));
     EXPECT_NEAR(a.z, b, rel * std::max(1.0, b));
@@ -108,16 +108,16 @@ TEST(GltfImporter, BlenderLightsComeBackInWatts) {
     const LightDesc* sun = light_of(d, LightType::Directional);
     ASSERT_TRUE(p && s && sun);
     const double point = 150 / (4 * kDegPi), spot = 400 / (4 * kDegPi);
-    expect_rgb(p->intensity, point, point * 0.9, point * 0.8);
+    expect_rgb_near(p->intensity, point, point * 0.9, point * 0.8);
     expect_vec(p->position, {2, 2.5, 1.5}, 1e-5);
-    expect_rgb(s->intensity, spot * 0.8, spot * 0.9, spot);
+    expect_rgb_near(s->intensity, spot * 0.8, spot * 0.9, spot);
     EXPECT_NEAR(s->cutoff_angle, 25, 1e-3);           // Blender spot_size 50 degrees
     EXPECT_NEAR(s->beam_width, 25 * (1 - 0.3), 1e-3);  // spot_blend 0.3
     expect_vec(column(s->to_world, 3), {-2, 3, 2}, 1e-5);
     // Blender rotation (40, 0, -45): shines along (sin40 sin45, sin40 cos45, -cos40) in Blender axes.
     const double s40 = std::sin(40 * kDegPi / 180), c40 = std::cos(40 * kDegPi / 180), h = std::sqrt(0.5);
     expect_vec(column(s->to_world, 2), {s40 * h, -c40, -s40 * h}, 1e-5);
-    expect_rgb(sun->irradiance, 1.5, 1.5, 1.5);
+    expect_rgb_near(sun->irradiance, 1.5, 1.5, 1.5);
     // Rotation (30, 20, 0): (-cos30 sin20, sin30, -cos30 cos20) in Blender axes.
     const double c30 = std::cos(30 * kDegPi / 180), s20 = std::sin(20 * kDegPi / 180), c20 = std::cos(20 * kDegPi / 180);
     expect_vec(sun->direction, {-c30 * s20, -c30 * c20, -0.5}, 1e-5);
@@ -133,7 +133,7 @@ TEST(GltfImporter, BlenderMaterialsMapToConductorAndPlastic) {
     EXPECT_NEAR(floor.alpha, 0.81, 1e-5);
     EXPECT_FLOAT_EQ(floor.eta, 1.5f);
     EXPECT_EQ(floor.distribution, MicrofacetType::GGX);
-    expect_rgb(floor.diffuse_reflectance, 0.5, 0.5, 0.5);
+    expect_rgb_near(floor.diffuse_reflectance, 0.5, 0.5, 0.5);
     // Checker: base colour texture kept; the roughness texture (G = 0.2 | 0.8 stripes) averaged.
     const MaterialDesc& checker = d.materials.at("Checker");
     const auto& cp = std::get<PlasticBsdf>(checker.bsdf);
@@ -144,7 +144,7 @@ TEST(GltfImporter, BlenderMaterialsMapToConductorAndPlastic) {
     // Gold: metallic 1 -> conductor with Fresnel 1 tinted by the base colour, alpha = 0.3^2.
     const auto& gold = std::get<ConductorBsdf>(d.materials.at("Gold").bsdf);
     EXPECT_FALSE(gold.has_ior);
-    expect_rgb(gold.specular_reflectance, 1.0, 0.71, 0.29);
+    expect_rgb_near(gold.specular_reflectance, 1.0, 0.71, 0.29);
     EXPECT_NEAR(gold.alpha_u, 0.09, 1e-5);
     EXPECT_NEAR(gold.alpha_v, 0.09, 1e-5);
     // The emissive panel: emissiveFactor x KHR_materials_emissive_strength 4, both sides.
@@ -155,7 +155,7 @@ TEST(GltfImporter, BlenderMaterialsMapToConductorAndPlastic) {
         if (!sh.emitter) continue;
         ++emitters;
         EXPECT_EQ(sh.material, "Panel");
-        expect_rgb(sh.emitter->radiance, 4, 3.2, 2.4);
+        expect_rgb_near(sh.emitter->radiance, 4, 3.2, 2.4);
         EXPECT_TRUE(sh.emitter->two_sided);
     }
     EXPECT_EQ(emitters, 1);

@@ -19,6 +19,12 @@ inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& n,
     return po;
 }
 
+// A direction counts as leaving on the side the shading frame says only if the geometric normal
+// agrees; otherwise interpolated normals would leak light through surfaces.
+inline bool consistent_side(const Vec3& w_world, const Vec3& ng, float cos_shading) {
+    return dot(w_world, ng) * cos_shading > 0;
+}
+
 inline Ray spawn_ray(const SurfaceHit& h, const Vec3& w) {
     Ray r;
     r.o = offset_ray_origin(h.p, h.p_error, h.ng, w);

@@ -22,12 +22,12 @@
 namespace omega {
 namespace {
 
-constexpr int kRes = 16;
+constexpr int kFilmRes = 16;
 constexpr double kFov = 30, kR = 0.5, kIntensity = 2.0;
 
 double analytic_total(double D) {
     const double t = std::tan(kFov * kPiD / 360.0);
-    const double a = (2 * t / kRes) * (2 * t / kRes);
+    const double a = (2 * t / kFilmRes) * (2 * t / kFilmRes);
     const double A = kPiD * kR * kR;
     return kIntensity / (A * a * D * D * D) * (2 * kPiD / 3) * (std::pow(D * D + kR * kR, 1.5) - D * D * D);
 }
@@ -35,7 +35,7 @@ double analytic_total(double D) {
 // Camera at the origin looking along +z with a lens of radius kR focused at `focus`; a point
 // light at z_light; optionally a large perfect mirror at z = 1 facing the camera.
 SceneDesc scene(double z_light, bool mirror, double focus, IntegratorType type) {
-    SceneDesc d = test::empty_scene(kRes, kRes);
+    SceneDesc d = test::empty_scene(kFilmRes, kFilmRes);
     d.integrator.type = type;
     d.integrator.max_depth = 4;
     d.sensor.type = SensorType::ThinLens;

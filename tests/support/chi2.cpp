@@ -232,7 +232,7 @@ Chi2Result chi2_sphere(const DirSampler& sampler, const DirPdfSa& pdf_sa, const 
     return finish(std::move(observed), cells, valid, invalid, mismatches, opt);
 }
 
-Chi2Result chi2_plane(const PointSampler& sampler, const PointPdfArea& pdf_area, Rect domain, const Chi2Options& opt,
+Chi2Result chi2_plane(const PointSampler& sampler, const PointPdfArea& pdf_area, PlaneDomain domain, const Chi2Options& opt,
                       int res_x, int res_y) {
     std::vector<double> cells = integrate_cells(
         [&](double x, double y) { return pdf_area(Vec2{float(x), float(y)}); }, domain.x0, domain.x1, domain.y0,

@@ -71,10 +71,10 @@ struct PointSample {
 using PointSampler = std::function<std::optional<PointSample>(omega::Rng&)>;
 using PointPdfArea = std::function<double(Vec2)>;
 
-struct Rect {
+struct PlaneDomain {
     double x0, y0, x1, y1;
 };
-Chi2Result chi2_plane(const PointSampler& sampler, const PointPdfArea& pdf_area, Rect domain,
+Chi2Result chi2_plane(const PointSampler& sampler, const PointPdfArea& pdf_area, PlaneDomain domain,
                       const Chi2Options& opt, int res_x = 64, int res_y = 64);
 
 }  // namespace omega::test
