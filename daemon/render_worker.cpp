@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -128,6 +129,37 @@ void RenderWorker::request_stop(StopKind k) {
   if (rank(k) <= rank(cur)) return;
   stop_.store(static_cast<int>(k));
   if (k != StopKind::drain && session_) session_->abort();
+}
+
+namespace {
+
+bool disk_full(const std::string& what) {
+  return what.find("No space left") != std::string::npos || what.find("quota exceeded") != std::string::npos;
+}
+
+}  // namespace
+
+// Driver thread. The film is clean and in memory when the halt is reached, so a full disk at
+// that moment (another job's upload refused for space, a log not yet rotated) is waited out
+// rather than failing an accepted job: the write is tried again every second, for up to
+// kFullDiskPatience, while no stop is requested. Any other error fails at once.
+void RenderWorker::write_final(const char* what, const std::function<void()>& write) {
+  constexpr auto kFullDiskPatience = std::chrono::minutes(10);
+  const auto give_up = std::chrono::steady_clock::now() + kFullDiskPatience;
+  for (bool warned = false;;) {
+    try {
+      write();
+      if (warned) log_.info("job {}: {} written once the disk had room", spec_.job, what);
+      return;
+    } catch (const std::exception& e) {
+      if (!disk_full(e.what()) || std::chrono::steady_clock::now() >= give_up || stop_requested() != StopKind::none)
+        throw;
+      if (!warned) log_.warn("job {}: {} not written ({}); trying again every second", spec_.job, what, e.what());
+      warned = true;
+    }
+    for (int i = 0; i < 20 && stop_requested() == StopKind::none; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
 }
 
 void RenderWorker::run() {
@@ -322,7 +354,7 @@ void RenderWorker::run() {
     result.last = last;
     if (!session.aborted()) {
       // Halt reached: the film is clean. Keep a final checkpoint and the result image.
-      if (last && !last_on_disk) write_checkpoint(spec_.paths.checkpoint(), *last);
+      if (last && !last_on_disk) write_final("final checkpoint", [&] { write_checkpoint(spec_.paths.checkpoint(), *last); });
       FilmSnapshot meta = last ? *last : FilmSnapshot{};
       ExrMeta m;
       m.spp = static_cast<long long>(meta.spp);
@@ -335,7 +367,7 @@ void RenderWorker::run() {
       m.rel_error = meta.rel_error.value_or(0);
       append_aov_layers(aov_films, m);
       add_breakdown_attributes(meta, m);
-      write_exr(spec_.paths.result(), session.film(), m);
+      write_final("result image", [&] { write_exr(spec_.paths.result(), session.film(), m); });
       result.outcome = WorkerResult::Outcome::done;
     } else {
       result.outcome = WorkerResult::Outcome::stopped;

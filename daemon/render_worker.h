@@ -101,6 +101,8 @@ class RenderWorker {
 
  private:
   void run();  // driver thread
+  // Driver thread: write(), tried again while the disk is full (see the definition).
+  void write_final(const char* what, const std::function<void()>& write);
 
   WorkerSpec spec_;
   Log& log_;

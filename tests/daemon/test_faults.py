@@ -10,7 +10,7 @@ import subprocess
 import threading
 import time
 
-from harness import Daemon, Test, exr_equal, local_render, op, small_cornell, wait_state
+from harness import SLOWDOWN, Daemon, Test, exr_equal, local_render, op, small_cornell, wait_spp, wait_state
 
 TRI_OBJ = b"v -0.5 0.2 -0.5\nv 0.5 0.2 -0.5\nv 0 0.9 0\nf 1 2 3\n"
 
@@ -228,10 +228,50 @@ def test_disk_full(tmp, daemons):
         subprocess.run(["umount", "-l", mnt], capture_output=True)
 
 
+def test_disk_full_at_job_end(tmp, daemons):
+    """The disk is full when a job reaches its halt: its final checkpoint and result image are
+    written once there is room again (tried every second), and the job ends done, with every
+    sample and the image of a local render, instead of failed."""
+    mnt = os.path.join(tmp, "small-end")
+    os.makedirs(mnt)
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=8m", "tmpfs", mnt], capture_output=True).returncode != 0:
+        print("  SKIP test_disk_full_at_job_end: cannot mount a tmpfs here (needs root)")
+        return
+    try:
+        d = Daemon(tmp, config="max_running: 1\n", state_dir=os.path.join(mnt, "state")).start()
+        daemons.append(d)
+        c = d.client()
+        scene = small_cornell(width=32, height=32)
+        spp = 1024 // SLOWDOWN  # long enough to fill the disk while it renders
+        h = c.submit(scene, name="ends-on-a-full-disk", seed=3, halt_=op.halt(spp=spp))
+        assert h["type"] == "accepted", h
+        wait_spp(c, h["job"], 1)
+        filler = os.path.join(mnt, "filler")
+        with open(filler, "wb") as f:
+            try:
+                while True:
+                    f.write(b"\0" * (1 << 16))
+                    f.flush()
+            except OSError:
+                pass
+        d.wait_log(r"not written \(.*No space left on device.*\); trying again every second", timeout=120)
+        assert c.job("status", h["job"])["state"] == "running"
+        os.remove(filler)
+        info = wait_state(c, h["job"], {"done", "failed"})
+        assert info["state"] == "done" and info["progress"]["spp"] == spp, info
+        d.wait_log(r"written once the disk had room")
+        local = os.path.join(tmp, "local-end.exr")
+        local_render(scene, local, spp, 3, tmp)
+        assert exr_equal(local, fetch_to(c, h["job"], os.path.join(tmp, "end.exr")))
+        d.stop()
+    finally:
+        subprocess.run(["umount", "-l", mnt], capture_output=True)
+
+
 if __name__ == "__main__":
     t = Test()
     for fn in (test_corrupt_checkpoint, test_corrupt_cached_asset, test_database_locked, test_database_locked_at_job_end,
                test_kill9_at_random_moments,
-               test_disk_full):
+               test_disk_full, test_disk_full_at_job_end):
         t.run(fn)
     t.exit()
