@@ -1,6 +1,7 @@
 """Faults: a corrupt checkpoint, a corrupt cached asset (caught by its hash), the SQLite database
 locked by another process (at a submit, and at a job's end and a pause). Each keeps every accepted job and leaves a clear log line. (kill -9
 mid-pass is test_crash.py; a half frame held open is test_security.py.)"""
+import contextlib
 import hashlib
 import os
 import random
@@ -197,19 +198,32 @@ def test_kill9_at_random_moments(tmp, daemons):
     print(f"  6 kill -9 rounds, {len(accepted)} accepted jobs, all done")
 
 
+@contextlib.contextmanager
+def daemon_on_tmpfs(tmp, daemons, name, size):
+    """omegad (one job at a time) whose state dir is on a fresh tmpfs of `size`, unmounted after;
+    yields (None, path) where no tmpfs can be mounted (not root)."""
+    mnt = os.path.join(tmp, name)
+    os.makedirs(mnt)
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", mnt], capture_output=True).returncode != 0:
+        yield None, mnt
+        return
+    try:
+        d = Daemon(tmp, config="max_running: 1\n", state_dir=os.path.join(mnt, "state")).start()
+        daemons.append(d)
+        yield d, mnt
+    finally:
+        subprocess.run(["umount", "-l", mnt], capture_output=True)
+
+
 def test_disk_full(tmp, daemons):
     """The state dir on a small tmpfs: a submit that does not fit gets `busy` naming the disk,
     the daemon carries on, and jobs accepted before still finish (a checkpoint that finds the
     disk full is skipped with a warning, not the job failed: under a sanitizer the first job is
     often still rendering while the big asset fills the disk)."""
-    mnt = os.path.join(tmp, "small")
-    os.makedirs(mnt)
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", mnt], capture_output=True).returncode != 0:
-        print("  SKIP test_disk_full: cannot mount a tmpfs here (needs root)")
-        return
-    try:
-        d = Daemon(tmp, config="max_running: 1\n", state_dir=os.path.join(mnt, "state")).start()
-        daemons.append(d)
+    with daemon_on_tmpfs(tmp, daemons, "small", "4m") as (d, mnt):
+        if d is None:
+            print("  SKIP test_disk_full: cannot mount a tmpfs here (needs root)")
+            return
         c = d.client()
         scene = small_cornell(width=32, height=32).replace(
             b"shapes:\n", b"shapes:\n  - {type: mesh, file: m.obj, material: FloorBSDF}\n", 1)
@@ -224,22 +238,16 @@ def test_disk_full(tmp, daemons):
         info = wait_state(c, first["job"], {"done"})
         assert info["progress"]["spp"] == 4, info
         d.stop()
-    finally:
-        subprocess.run(["umount", "-l", mnt], capture_output=True)
 
 
 def test_disk_full_at_job_end(tmp, daemons):
     """The disk is full when a job reaches its halt: its final checkpoint and result image are
     written once there is room again (tried every second), and the job ends done, with every
     sample and the image of a local render, instead of failed."""
-    mnt = os.path.join(tmp, "small-end")
-    os.makedirs(mnt)
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=8m", "tmpfs", mnt], capture_output=True).returncode != 0:
-        print("  SKIP test_disk_full_at_job_end: cannot mount a tmpfs here (needs root)")
-        return
-    try:
-        d = Daemon(tmp, config="max_running: 1\n", state_dir=os.path.join(mnt, "state")).start()
-        daemons.append(d)
+    with daemon_on_tmpfs(tmp, daemons, "small-end", "8m") as (d, mnt):
+        if d is None:
+            print("  SKIP test_disk_full_at_job_end: cannot mount a tmpfs here (needs root)")
+            return
         c = d.client()
         scene = small_cornell(width=32, height=32)
         spp = 1024 // SLOWDOWN  # long enough to fill the disk while it renders
@@ -247,11 +255,10 @@ def test_disk_full_at_job_end(tmp, daemons):
         assert h["type"] == "accepted", h
         wait_spp(c, h["job"], 1)
         filler = os.path.join(mnt, "filler")
-        with open(filler, "wb") as f:
+        with open(filler, "wb", buffering=0) as f:  # unbuffered: nothing left to fail at close
             try:
                 while True:
                     f.write(b"\0" * (1 << 16))
-                    f.flush()
             except OSError:
                 pass
         d.wait_log(r"not written \(.*No space left on device.*\); trying again every second", timeout=120)
@@ -264,8 +271,6 @@ def test_disk_full_at_job_end(tmp, daemons):
         local_render(scene, local, spp, 3, tmp)
         assert exr_equal(local, fetch_to(c, h["job"], os.path.join(tmp, "end.exr")))
         d.stop()
-    finally:
-        subprocess.run(["umount", "-l", mnt], capture_output=True)
 
 
 if __name__ == "__main__":
