@@ -151,7 +151,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                                     sampler.start_dimension(dims::kFilm);
                                     Vec2 u_film = sampler.next_2d();
                                     sampler.start_dimension(dims::kLens);
-                                    Vec2 u_lens = sampler.next_2d();
+                                    Vec2 u_lens = sampler.next_2d_if(sensor.uses_lens_sample());
                                     Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
                                     local.clear();
                                     if (per) per->clear();
@@ -239,7 +239,7 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
                 sampler.start_dimension(dims::kFilm);
                 Vec2 u_film = sampler.next_2d();
                 sampler.start_dimension(dims::kLens);
-                Vec2 u_lens = sampler.next_2d();
+                Vec2 u_lens = sampler.next_2d_if(sensor.uses_lens_sample());
                 Vec2 pos = film_.sample_position(x, y, u_film);
                 Ray ray = sensor.generate_ray(pos, u_lens);
                 if (lpe) lpe->reset();

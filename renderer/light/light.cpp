@@ -119,7 +119,7 @@ std::optional<LightSample> light_sample_li(const Scene& scene, const Light& ligh
             Vec3 d = ls.p - ref;
             float dist2 = length_sq(d);
             if (dist2 == 0) return std::nullopt;
-            ls.pdf_sa = convert_area_to_sa(float(1.0 / sh.area), dist2, absdot(ls.n, d / std::sqrt(dist2)));
+            ls.pdf_sa = convert_area_to_sa(sh.inv_area, dist2, absdot(ls.n, d / std::sqrt(dist2)));
             if (ls.pdf_sa == 0) return std::nullopt;
         }
         Vec3 d = ls.p - ref;
@@ -206,7 +206,7 @@ float light_pdf_li_sa(const Scene& scene, const AreaLight& light, const Vec3& re
     Vec3 d = hit.p - ref;
     float dist2 = length_sq(d);
     if (!(dist2 > 0)) return 0.f;
-    return convert_area_to_sa(float(1.0 / sh.area), dist2, absdot(hit.ng, d / std::sqrt(dist2)));
+    return convert_area_to_sa(sh.inv_area, dist2, absdot(hit.ng, d / std::sqrt(dist2)));
 }
 
 Rgb light_emission_towards(const Light& light, const SurfaceHit& at, const Vec3& w) {

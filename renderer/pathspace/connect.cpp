@@ -185,7 +185,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         if (!y.connectible() || y.infinite) return std::nullopt;
         const Sensor& sensor = scene.sensor();
         sampler.start_dimension(dims::connect_sensor(s));
-        auto sc = sensor.sample_wi(y.p(), sampler.next_2d());
+        auto sc = sensor.sample_wi(y.p(), sampler.next_2d_if(sensor.uses_lens_sample()));
         if (!sc) return std::nullopt;
         if (!set.single_strategy() || full_path || pdfs) {  // only the MIS weight and the tests read it
             sampled = sensor_vertex(scene, sc->p);

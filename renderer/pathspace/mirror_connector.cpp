@@ -214,7 +214,7 @@ std::optional<Connection> connect_via_mirror(const Scene& scene, int mi, const s
         if (!y.connectible() || y.infinite || !mirror.usable_from(y.p())) return std::nullopt;
         const Sensor& sensor = scene.sensor();
         sampler.start_dimension(dims::mirror_sensor(s, mi));
-        auto sc = sensor.sample_wi(mirror.image(y.p()), sampler.next_2d());
+        auto sc = sensor.sample_wi(mirror.image(y.p()), sampler.next_2d_if(sensor.uses_lens_sample()));
         if (!sc || !(mirror.side(sc->p) * mirror.side(y.p()) > 0)) return std::nullopt;
         auto m = plane_crossing(mirror, mirror.image(y.p()), sc->p);
         if (!m) return std::nullopt;

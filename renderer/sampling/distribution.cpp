@@ -23,13 +23,13 @@ DiscreteDistribution::DiscreteDistribution(const std::vector<double>& weights) {
 
 size_t DiscreteDistribution::sample(float u, float* u_remapped) const {
     // The first entry above u (upper_bound), clamped to the last. Most distributions here are a
-    // light's few triangles or a scene's few lights: a scan beats the binary search's
-    // mispredicted branches there, and finds the same entry.
+    // light's few triangles or a scene's few lights: counting the entries not above u (the cdf
+    // is non-decreasing, so that is the same entry) has no branch to mispredict, where a
+    // rectangle light's two triangles made the search's branch a coin flip per light sample.
     const double ud = double(u);
-    size_t i;
+    size_t i = 0;
     if (cdf_.size() <= 8) {
-        i = 0;
-        while (i + 1 < cdf_.size() && !(cdf_[i] > ud)) ++i;
+        for (size_t j = 0; j + 1 < cdf_.size(); ++j) i += !(cdf_[j] > ud);
     } else {
         auto it = std::upper_bound(cdf_.begin(), cdf_.end(), ud);
         i = size_t(std::min<ptrdiff_t>(it - cdf_.begin(), ptrdiff_t(cdf_.size()) - 1));

@@ -177,6 +177,15 @@ public:
         return 0.f;
     }
 
+    // next_2d() where the decision is `needed` (a lens sample for a camera with a finite
+    // aperture), else the pair's skip and (0, 0): the same values and stream as skip_1d() twice.
+    Vec2 next_2d_if(bool needed) {
+        if (needed) return next_2d();
+        skip_1d();
+        skip_1d();
+        return {0.f, 0.f};
+    }
+
     Vec2 next_2d() {
         if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) {
             float a = rng_.next_1d();

@@ -5,19 +5,27 @@
 
 namespace omega {
 
-// Shirley-Chiu concentric map: low distortion, keeps stratification.
+Vec2 sincos_quarter_pi(float x) {
+    // Taylor series to x^9 and x^8: the first terms left out are below 3e-9 and 3e-8 at pi/4,
+    // under half an ulp of the results there. libm's sincosf reduces the argument first and was
+    // a third of the cost of every diffuse bounce.
+    const float x2 = x * x;
+    const float s = x * (1.f + x2 * (-1.f / 6 + x2 * (1.f / 120 + x2 * (-1.f / 5040 + x2 * (1.f / 362880)))));
+    const float c = 1.f + x2 * (-0.5f + x2 * (1.f / 24 + x2 * (-1.f / 720 + x2 * (1.f / 40320))));
+    return {c, s};
+}
+
+// Shirley-Chiu concentric map: low distortion, keeps stratification. Its angle is pi/4 times a
+// ratio in [-1, 1], or pi/2 minus that (cos and sin swapped): always within sincos_quarter_pi.
 Vec2 square_to_uniform_disk_concentric(Vec2 u) {
     float ox = 2.f * u.x - 1.f, oy = 2.f * u.y - 1.f;
     if (ox == 0 && oy == 0) return {0, 0};
-    float r, theta;
     if (std::abs(ox) > std::abs(oy)) {
-        r = ox;
-        theta = (kPi / 4.f) * (oy / ox);
-    } else {
-        r = oy;
-        theta = (kPi / 2.f) - (kPi / 4.f) * (ox / oy);
+        const Vec2 cs = sincos_quarter_pi((kPi / 4.f) * (oy / ox));
+        return {ox * cs.x, ox * cs.y};
     }
-    return {r * std::cos(theta), r * std::sin(theta)};
+    const Vec2 cs = sincos_quarter_pi((kPi / 4.f) * (ox / oy));
+    return {oy * cs.y, oy * cs.x};
 }
 
 Vec3 square_to_cosine_hemisphere(Vec2 u) {

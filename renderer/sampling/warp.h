@@ -5,6 +5,8 @@
 
 namespace omega {
 
+// {cos x, sin x} for |x| <= pi/4, within an ulp or two of libm's (warp_test checks it).
+Vec2 sincos_quarter_pi(float x);
 Vec2 square_to_uniform_disk_concentric(Vec2 u);
 inline float square_to_uniform_disk_pdf_area() { return kInvPi; }
 

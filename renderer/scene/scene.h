@@ -51,6 +51,7 @@ struct Shape {
     float bump_scale = 1.f;
     Vec3 sphere_axes[3];    // sphere: unit world directions of its local x, y, z (for uv)
     double area = 0;                     // world-space surface area
+    float inv_area = 0;                  // float(1 / area): light sampling's density, without a division per sample
     DiscreteDistribution tri_by_area;    // triangles, for uniform area sampling
     std::string name;                    // for messages: "shapes[3]"
 };

@@ -292,6 +292,7 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
             sh.light = int32_t(s->lights_.size());
             s->lights_.push_back(AreaLight{uint32_t(i), sd.emitter->radiance, sd.emitter->two_sided});
         }
+        sh.inv_area = float(1.0 / sh.area);
         s->shapes_.push_back(std::move(sh));
     }
     for (const LightDesc& ld : desc.lights) {

@@ -82,6 +82,10 @@ struct Sensor {
     // that light subpaths can hit. Only such a lens is hittable; pinholes and the orthographic
     // sensor are delta in position or direction.
     bool lens_hittable() const;
+    // Whether generate_ray and sample_wi read their lens sample: only a lens of finite aperture
+    // (a pinhole, a zero aperture and the orthographic sensor give the same ray for any u_lens),
+    // so the samplers skip that draw elsewhere.
+    bool uses_lens_sample() const { return lens_hittable(); }
     Vec3 lens_normal() const;  // world optical axis: the lens disk's normal, facing the scene
     struct LensHit {
         Vec3 p;          // the point on the lens
