@@ -11,12 +11,8 @@ inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& n,
     float d = dot(abs(n), p_error);
     Vec3 offset = n * d;
     if (dot(w, n) < 0) offset = -offset;
-    Vec3 po = p + offset;
-    for (int i = 0; i < 3; ++i) {
-        if (offset[i] > 0) po[i] = next_float_up(po[i]);
-        else if (offset[i] < 0) po[i] = next_float_down(po[i]);
-    }
-    return po;
+    const Vec3 po = p + offset;
+    return {next_float_toward(po.x, offset.x), next_float_toward(po.y, offset.y), next_float_toward(po.z, offset.z)};
 }
 
 // A direction counts as leaving on the side the shading frame says only if the geometric normal
