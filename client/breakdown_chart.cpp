@@ -1,7 +1,5 @@
 #include "breakdown_chart.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -10,6 +8,8 @@
 #include <vector>
 
 #include <fmt/format.h>
+
+#include "io/image_library.h"
 
 namespace omega {
 
@@ -151,11 +151,8 @@ void write_breakdown_chart(const BreakdownReport& r, const std::string& path) {
         draw_text(img, legend_x + kTextHeight + 8, y, text);
         y += kTextHeight + 6;
     }
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out) throw std::runtime_error(path + ": " + OIIO::geterror());
-    const OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, img.rgb.data()) || !out->close())
-        throw std::runtime_error(path + ": " + out->geterror());
+    if (std::string why = image_library().write_rgb8(path, width, height, img.rgb.data()); !why.empty())
+        throw std::runtime_error(path + ": " + why);
 }
 
 }  // namespace omega

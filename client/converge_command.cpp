@@ -1,7 +1,5 @@
 #include "converge_command.h"
 
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
 #include <fmt/format.h>
 
 #include <chrono>
@@ -18,6 +16,7 @@
 #include "film/film.h"
 #include "import_command.h"
 #include "integrator/render_session.h"
+#include "io/image_library.h"
 #include "scene/mitsuba_importer.h"
 #include "scene/scene.h"
 #include "scene/scene_error.h"
@@ -25,7 +24,6 @@
 namespace omega {
 
 namespace fs = std::filesystem;
-namespace IBA = OIIO::ImageBufAlgo;
 
 std::vector<double> converge_times(double budget_s) {
     std::vector<double> t;
@@ -50,35 +48,31 @@ double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) 
 
 namespace {
 
-double channel_mean(const IBA::PixelStats& s) {
-    double m = 0;
-    for (float v : s.avg) m += v;
-    return s.avg.empty() ? 0 : m / double(s.avg.size());
-}
-
-ImageError image_error(const OIIO::ImageBuf& img, const OIIO::ImageBuf& ref) {
-    ImageError e;
-    IBA::CompareResults cr = IBA::compare(img, ref, 1e30f, 1e30f);
-    e.rmse = cr.rms_error;
-    OIIO::ImageBuf diff = IBA::sub(img, ref);
-    OIIO::ImageBuf denom = IBA::add(IBA::mul(ref, ref), float(kRelMseEps));
-    e.relmse = channel_mean(IBA::computePixelStats(IBA::div(IBA::mul(diff, diff), denom)));
-    OIIO::ImageBuf adenom = IBA::add(IBA::abs(ref), float(kRelMseEps));
-    e.mape = channel_mean(IBA::computePixelStats(IBA::div(IBA::abs(diff), adenom)));
-    double mi = channel_mean(IBA::computePixelStats(img)), mr = channel_mean(IBA::computePixelStats(ref));
-    e.mean_ratio = mr != 0 ? mi / mr : std::numeric_limits<double>::quiet_NaN();
-    return e;
+ImageError image_error(const ImagePixels& img, const ImagePixels& ref) {
+    double v[4];
+    if (std::string why = image_library().compare(img, ref, kRelMseEps, v); !why.empty()) throw std::runtime_error(why);
+    return {v[0], v[1], v[2], v[3]};
 }
 
 // The first three channels of an image file, as float.
-OIIO::ImageBuf read_rgb(const std::string& path) {
-    OIIO::ImageBuf in(path);
-    if (!in.read(0, 0, true, OIIO::TypeDesc::FLOAT)) throw std::runtime_error(path + ": " + in.geterror());
-    if (in.nchannels() < 3) throw std::runtime_error(path + ": expected at least 3 channels (R, G, B)");
-    int order[3] = {0, 1, 2};
-    OIIO::ImageBuf rgb = IBA::channels(in, 3, order);
-    if (rgb.has_error()) throw std::runtime_error(path + ": " + rgb.geterror());
+ImagePixels read_rgb(const std::string& path) {
+    ImagePixels in;
+    if (std::string why = image_library().read_file(path, in); !why.empty()) throw std::runtime_error(path + ": " + why);
+    if (in.channels < 3) throw std::runtime_error(path + ": expected at least 3 channels (R, G, B)");
+    if (in.channels == 3) return in;
+    ImagePixels rgb{in.width, in.height, 3, true, std::vector<float>(size_t(in.width) * size_t(in.height) * 3)};
+    for (size_t i = 0, n = size_t(in.width) * size_t(in.height); i < n; ++i)
+        for (size_t c = 0; c < 3; ++c) rgb.data[i * 3 + c] = in.data[i * size_t(in.channels) + c];
     return rgb;
+}
+
+// Rows y0..y1, columns x0..x1 of an RGB image (the film's crop window of a full-frame reference).
+ImagePixels cut(const ImagePixels& img, int x0, int y0, int x1, int y1) {
+    ImagePixels out{x1 - x0, y1 - y0, 3, true, std::vector<float>(size_t(x1 - x0) * size_t(y1 - y0) * 3)};
+    for (int y = y0; y < y1; ++y)
+        std::copy_n(&img.data[(size_t(y) * size_t(img.width) + size_t(x0)) * 3], size_t(x1 - x0) * 3,
+                    &out.data[size_t(y - y0) * size_t(x1 - x0) * 3]);
+    return out;
 }
 
 // Downsamples a reference by an integer factor with OIIO's filtered resize, using the filter that
@@ -86,23 +80,21 @@ OIIO::ImageBuf read_rgb(const std::string& path) {
 // tent-filtered reduction: measured on the Cornell box at 1/4 size, relMSE 0.0003 against 0.004
 // for a box reduction, whose edges differ).
 // A box film is compared with the exact k x k block average.
-OIIO::ImageBuf downsample(const OIIO::ImageBuf& ref, int w, int h, FilterType f) {
-    OIIO::ImageBuf small(OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::FLOAT));
+ImagePixels downsample(const ImagePixels& ref, int w, int h, FilterType f) {
     if (f == FilterType::Box) {
-        const OIIO::ImageSpec& rs = ref.spec();
-        int k = rs.width / w;
-        std::vector<float> in(size_t(rs.width) * size_t(rs.height) * 3), out(size_t(w) * size_t(h) * 3, 0.f);
-        ref.get_pixels(ref.roi(), OIIO::TypeDesc::FLOAT, in.data());
-        for (int y = 0; y < rs.height; ++y)
-            for (int x = 0; x < rs.width; ++x)
+        const int k = ref.width / w;
+        ImagePixels small{w, h, 3, true, std::vector<float>(size_t(w) * size_t(h) * 3, 0.f)};
+        for (int y = 0; y < ref.height; ++y)
+            for (int x = 0; x < ref.width; ++x)
                 for (int c = 0; c < 3; ++c)
-                    out[(size_t(y / k) * size_t(w) + size_t(x / k)) * 3 + size_t(c)] +=
-                        in[(size_t(y) * size_t(rs.width) + size_t(x)) * 3 + size_t(c)] / float(k * k);
-        small.set_pixels(small.roi(), OIIO::TypeDesc::FLOAT, out.data());
+                    small.data[(size_t(y / k) * size_t(w) + size_t(x / k)) * 3 + size_t(c)] +=
+                        ref.data[(size_t(y) * size_t(ref.width) + size_t(x)) * 3 + size_t(c)] / float(k * k);
         return small;
     }
-    const char* name = f == FilterType::Tent ? "triangle" : "gaussian";
-    if (!IBA::resize(small, ref, name)) throw std::runtime_error("resize: " + small.geterror());
+    ImagePixels small;
+    if (std::string why = image_library().resize(ref, w, h, f == FilterType::Tent ? "triangle" : "gaussian", small);
+        !why.empty())
+        throw std::runtime_error(why);
     return small;
 }
 
@@ -110,19 +102,16 @@ const char* filter_word(FilterType f) {
     return f == FilterType::Tent ? "tent" : f == FilterType::Gaussian ? "gaussian" : "box";
 }
 
-OIIO::ImageBuf film_image(const Film& film) {
+ImagePixels film_image(const Film& film) {
     Rect c = film.crop();
-    OIIO::ImageSpec spec(c.width(), c.height(), 3, OIIO::TypeDesc::FLOAT);
-    std::vector<float> px(size_t(c.width()) * size_t(c.height()) * 3);
+    ImagePixels img{c.width(), c.height(), 3, true, std::vector<float>(size_t(c.width()) * size_t(c.height()) * 3)};
     size_t i = 0;
     for (int y = c.y0; y < c.y1; ++y)
         for (int x = c.x0; x < c.x1; ++x) {
             PixelStats p = film.pixel(x, y);
-            for (int ch = 0; ch < 3; ++ch) px[i++] = float(p.mean[ch]);
+            for (int ch = 0; ch < 3; ++ch) img.data[i++] = float(p.mean[ch]);
         }
-    OIIO::ImageBuf buf(spec);
-    buf.set_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, px.data());
-    return buf;
+    return img;
 }
 
 struct Sample {
@@ -277,7 +266,7 @@ int run_converge(const ConvergeArgs& a) {
     const int W = film.crop[2] - film.crop[0], H = film.crop[3] - film.crop[1];
 
     // ---- the reference
-    OIIO::ImageBuf ref;
+    ImagePixels ref;
     std::string ref_note;
     if (variance_mode) {
         ref_note = "none (estimated variance)";
@@ -293,10 +282,9 @@ int run_converge(const ConvergeArgs& a) {
             fmt::print(stderr, "omega converge: cannot read the reference: {}\n", e.what());
             return 2;
         }
-        int rw = ref.spec().width, rh = ref.spec().height;
+        int rw = ref.width, rh = ref.height;
         if (film.has_crop && rw == film.width && rh == film.height) {
-            OIIO::ROI roi(film.crop[0], film.crop[2], film.crop[1], film.crop[3], 0, 1, 0, 3);
-            ref = IBA::cut(ref, roi);
+            ref = cut(ref, film.crop[0], film.crop[1], film.crop[2], film.crop[3]);
             ref_note = fmt::format("{} (cropped to the film's crop)", a.reference);
         } else if (rw == W && rh == H) {
             ref_note = a.reference;
@@ -391,7 +379,7 @@ int run_converge(const ConvergeArgs& a) {
             }
             size_t next = 0;
             double overhead = 0;  // snapshot time, not counted as render time
-            std::vector<std::pair<Sample, OIIO::ImageBuf>> snaps;
+            std::vector<std::pair<Sample, ImagePixels>> snaps;
             // final: the run's last report, which stands for every checkpoint not yet reached (a
             // time halt ends the run a little before its budget by the session's own clock, and
             // on a loaded machine that last checkpoint then had no row).
@@ -406,7 +394,7 @@ int run_converge(const ConvergeArgs& a) {
                 s.time_s = r.elapsed_s - overhead;
                 if (variance_mode) s.relvar = film_relvar(session->film());
                 if (classes) classes->record(*session, {name, run, rs.seed, s.target, s.time_s, s.spp, 0, {}, {}});
-                snaps.emplace_back(s, variance_mode ? OIIO::ImageBuf() : film_image(session->film()));
+                snaps.emplace_back(s, variance_mode ? ImagePixels() : film_image(session->film()));
                 overhead += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             };
             const PassReport fin = session->run([&](const PassReport& r) { record(r, false); });
@@ -532,7 +520,7 @@ void add_compare_command(CLI::App& app, CompareArgs& a) {
 }
 
 int run_compare(const CompareArgs& a) {
-    OIIO::ImageBuf img, ref;
+    ImagePixels img, ref;
     try {
         img = read_rgb(a.image);
         ref = read_rgb(a.reference);
@@ -540,7 +528,7 @@ int run_compare(const CompareArgs& a) {
         fmt::print(stderr, "omega compare: {}\n", e.what());
         return 2;
     }
-    int w = img.spec().width, h = img.spec().height, rw = ref.spec().width, rh = ref.spec().height;
+    int w = img.width, h = img.height, rw = ref.width, rh = ref.height;
     if (rw != w || rh != h) {
         if (rw % w || rh % h || rw / w != rh / h) {
             fmt::print(stderr, "omega compare: sizes {}x{} and {}x{} do not match\n", w, h, rw, rh);
@@ -550,9 +538,8 @@ int run_compare(const CompareArgs& a) {
         ref = downsample(ref, w, h, f);
         fmt::print("reference {}-filtered down {}x\n", a.filter, rw / w);
     }
-    // The reference's data window may start elsewhere; compare pixel for pixel.
-    img.set_origin(0, 0);
-    ref.set_origin(0, 0);
+    // Each holds its data window's pixels from (0, 0): an EXR's window may start elsewhere, and
+    // the two compare pixel for pixel.
     ImageError e = image_error(img, ref);
     fmt::print("RMSE {:.6g}  relMSE {:.6g} (eps {})  MAPE {:.6g}  mean ratio {:.6f}\n", e.rmse, e.relmse, kRelMseEps,
                e.mape, e.mean_ratio);

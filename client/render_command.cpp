@@ -32,8 +32,8 @@ namespace omega {
 
 namespace {
 
-// When this process started, on the steady clock: the dynamic linker spends about 0.3 s on
-// OpenImageIO's dependencies before main, and a user's `--time` budget includes it. From
+// When this process started, on the steady clock: a user's `--time` budget includes what ran
+// before main (the dynamic linker; 0.3 s when OpenImageIO was linked in, see io/image_library.h). From
 // /proc/self/stat (field 22, clock ticks since boot); now where that cannot be read.
 std::chrono::steady_clock::time_point process_start() {
     const auto now = std::chrono::steady_clock::now();

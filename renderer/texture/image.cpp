@@ -1,7 +1,5 @@
 #include "texture/image.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include <cmath>
@@ -9,6 +7,7 @@
 #include <filesystem>
 
 #include "io/file_gate.h"
+#include "io/image_library.h"
 #include "scene/scene_error.h"
 
 namespace omega {
@@ -60,40 +59,15 @@ ImagePixels decode_image_bytes(const std::string& bytes, const std::string& path
     };
     if (bytes.size() > kMaxImageFileBytes) throw fail("larger than 1 GiB");
     const std::string format = format_of(bytes, path);
-    auto in = format.empty() ? nullptr : OIIO::ImageInput::create(format, false);
-    (void)OIIO::geterror();  // create() leaves a message behind when it finds no reader
-    if (!in) throw fail("unknown image format");
-    if (!in->supports("ioproxy")) throw fail(fmt::format("{} images cannot be read from memory", in->format_name()));
-    OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
-    in->set_ioproxy(&proxy);
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);  // colour as stored: without this OIIO premultiplies PNG colour by its alpha
-    OIIO::ImageSpec spec;
-    // The name is only for messages: /proc cannot hold it, so a reader that ignored the proxy
-    // would find nothing.
-    const std::string fake = "/proc/omega-in-memory/" + std::filesystem::path(path).filename().string();
-    auto oiio_error = [&] {
-        std::string err = in->geterror();
-        for (std::size_t pos; (pos = err.find(fake)) != std::string::npos;) err.replace(pos, fake.size(), name);
-        return fail(err.empty() ? "not a valid " + format + " image" : err);
-    };
-    if (!in->open(fake, spec, config)) throw oiio_error();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw fail("the image is empty");
-    if (spec.depth > 1) throw fail("3D images are not textures");
-    // 12 bytes a texel once decoded: 8192 x 8192 is 800 MB; past that a small PNG could exhaust memory.
-    if (std::size_t(spec.width) * std::size_t(spec.height) > (std::size_t(1) << 26))
-        throw fail(fmt::format("{} x {} texels is larger than 8192 x 8192", spec.width, spec.height));
-    if (spec.nchannels > 64) throw fail(fmt::format("{} channels", spec.nchannels));
+    if (format.empty()) throw fail("unknown image format");
+    const ImageLibrary* lib;
+    try {
+        lib = &image_library();
+    } catch (const std::runtime_error& e) {
+        throw fail(e.what());
+    }
     ImagePixels out;
-    out.width = spec.width;
-    out.height = spec.height;
-    out.channels = spec.nchannels;
-    const auto base = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
-    out.is_float = base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::DOUBLE;
-    out.data.resize(std::size_t(spec.width) * std::size_t(spec.height) * std::size_t(spec.nchannels));
-    // Subimage 0, mip level 0, every channel, converted to float while reading.
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, out.data.data())) throw oiio_error();
-    in->close();
+    if (std::string why = lib->decode(bytes, format, path, name, out); !why.empty()) throw fail(why);
     return out;
 }
 

@@ -209,3 +209,58 @@ TEST_F(CliTest, UsageErrorsExitWithCodeTwo) {
 }
 
 }  // namespace
+
+namespace {
+
+// `command` through the shell, stderr merged into stdout.
+CmdResult shell(const std::string& command) {
+    CmdResult r;
+    FILE* p = popen((command + " 2>&1").c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+    int status = pclose(p);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+}  // namespace
+
+// OpenImageIO lives in libomega_images.so, opened when a command first needs an image
+// (io/image_library.h): omega does not load it at start, a command that needs it gets it, and
+// one that cannot load it fails alone with a message naming where it looked.
+TEST_F(CliTest, ImageLibraryLoadsOnlyWhenAnImageIsNeeded) {
+    CmdResult deps = shell("ldd " + std::string(OMEGA_BIN));
+    ASSERT_EQ(deps.code, 0) << deps.output;
+    EXPECT_EQ(deps.output.find("OpenImageIO"), std::string::npos) << deps.output;
+
+    std::string scene = write("good.yaml", kGood);
+    std::string out = (dir_ / "out.exr").string();
+    ASSERT_EQ(run("render " + scene + " -o " + out + " --spp 2 -q").code, 0);
+    CmdResult same = run("compare " + out + " " + out);
+    EXPECT_EQ(same.code, 0) << same.output;
+    EXPECT_NE(same.output.find("RMSE 0 "), std::string::npos) << same.output;
+
+    const std::string missing = (dir_ / "no-such-libomega_images.so").string();
+    CmdResult refused = shell("OMEGA_IMAGE_LIBRARY=" + missing + " " + OMEGA_BIN + " compare " + out + " " + out);
+    EXPECT_EQ(refused.code, 2) << refused.output;
+    EXPECT_NE(refused.output.find("cannot load the image library libomega_images.so"), std::string::npos) << refused.output;
+    EXPECT_NE(refused.output.find(missing + ": not there"), std::string::npos) << refused.output;
+    // A module someone else could replace is refused; the same file kept to its owner is used.
+    const fs::path copy = dir_ / "libomega_images.so";
+    fs::copy_file(OMEGA_IMAGES_MODULE, copy);
+    fs::permissions(copy, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read | fs::perms::group_write |
+                              fs::perms::others_read);
+    CmdResult writable = shell("OMEGA_IMAGE_LIBRARY=" + copy.string() + " " + OMEGA_BIN + " compare " + out + " " + out);
+    EXPECT_EQ(writable.code, 2) << writable.output;
+    EXPECT_NE(writable.output.find("writable by others or owned by another user, refused"), std::string::npos)
+        << writable.output;
+    fs::permissions(copy, fs::perms::group_write, fs::perm_options::remove);
+    CmdResult kept = shell("OMEGA_IMAGE_LIBRARY=" + copy.string() + " " + OMEGA_BIN + " compare " + out + " " + out);
+    EXPECT_EQ(kept.code, 0) << kept.output;
+    // Rendering an untextured scene needs no image library at all.
+    CmdResult render = shell("OMEGA_IMAGE_LIBRARY=" + missing + " " + OMEGA_BIN + " render " + scene + " -o " + out +
+                             " --spp 1 -q");
+    EXPECT_EQ(render.code, 0) << render.output;
+}
