@@ -212,18 +212,7 @@ TEST_F(CliTest, UsageErrorsExitWithCodeTwo) {
 
 namespace {
 
-// `command` through the shell, stderr merged into stdout.
-CmdResult shell(const std::string& command) {
-    CmdResult r;
-    FILE* p = popen((command + " 2>&1").c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    int status = pclose(p);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+CmdResult shell(const std::string& command) { return omega::test::run_shell(command); }
 
 }  // namespace
 

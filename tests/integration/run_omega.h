@@ -14,11 +14,10 @@ struct OmegaResult {
     std::string output;  // stdout and stderr
 };
 
-// `omega ARGS` through the shell, stderr merged into stdout.
-inline OmegaResult run_omega(const std::string& args) {
-    std::string cmd = std::string(OMEGA_BIN) + " " + args + " 2>&1";
+// `command` through the shell, stderr merged into stdout.
+inline OmegaResult run_shell(const std::string& command) {
     OmegaResult r;
-    FILE* p = popen(cmd.c_str(), "r");
+    FILE* p = popen((command + " 2>&1").c_str(), "r");
     if (!p) return r;
     std::array<char, 4096> buf;
     size_t n;
@@ -27,5 +26,8 @@ inline OmegaResult run_omega(const std::string& args) {
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
 }
+
+// `omega ARGS` through the shell, stderr merged into stdout.
+inline OmegaResult run_omega(const std::string& args) { return run_shell(std::string(OMEGA_BIN) + " " + args); }
 
 }  // namespace omega::test
