@@ -94,6 +94,7 @@ long long RenderSession::render_pass_splatting(tbb::task_arena& arena, const std
 void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long i) {
     const Rect crop = film_.crop();
     const Sensor& sensor = scene_.sensor();
+    const bool lens = sensor.uses_lens_sample();  // asked once, not per sample
     const uint64_t width = uint64_t(sensor.width);
     const double inv_light_paths_per_sample = 1.0 / double(std::max<long long>(1, crop.area()));
     std::vector<Vec3d>& sums = batch_sums_;
@@ -151,7 +152,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                                     sampler.start_dimension(dims::kFilm);
                                     Vec2 u_film = sampler.next_2d();
                                     sampler.start_dimension(dims::kLens);
-                                    Vec2 u_lens = sampler.next_2d_if(sensor.uses_lens_sample());
+                                    Vec2 u_lens = sampler.next_2d_if(lens);
                                     Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
                                     local.clear();
                                     if (per) per->clear();
@@ -226,6 +227,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
 
 void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats) {
     const Sensor& sensor = scene_.sensor();
+    const bool lens = sensor.uses_lens_sample();  // asked once, not per sample
     std::optional<CameraLpeTracker> lpe;
     if (aovs_) lpe.emplace(aovs_->lpes());
     std::optional<PathClassTracker> classes;
@@ -239,7 +241,7 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
                 sampler.start_dimension(dims::kFilm);
                 Vec2 u_film = sampler.next_2d();
                 sampler.start_dimension(dims::kLens);
-                Vec2 u_lens = sampler.next_2d_if(sensor.uses_lens_sample());
+                Vec2 u_lens = sampler.next_2d_if(lens);
                 Vec2 pos = film_.sample_position(x, y, u_film);
                 Ray ray = sensor.generate_ray(pos, u_lens);
                 if (lpe) lpe->reset();
