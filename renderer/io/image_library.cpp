@@ -16,6 +16,16 @@ namespace {
 
 constexpr const char* kModuleName = "libomega_images.so";
 
+// Whether `file` lies under `dir`, after resolving links in both (the build dir may be reached
+// through a link, /proc/self/exe never is).
+[[maybe_unused]] bool inside(const std::filesystem::path& file, const char* dir) {
+    std::error_code ec;
+    const std::filesystem::path d = std::filesystem::weakly_canonical(dir, ec);
+    if (ec || d.empty()) return false;
+    const auto rel = file.lexically_relative(d);
+    return !rel.empty() && *rel.begin() != "..";
+}
+
 std::vector<std::string> candidates() {
     // Set, it is the only place looked: a deployment that names its module gets that one or an error.
     if (const char* env = std::getenv("OMEGA_IMAGE_LIBRARY"); env && *env) return {env};
@@ -26,8 +36,10 @@ std::vector<std::string> candidates() {
         paths.push_back((exe.parent_path() / kModuleName).string());
         paths.push_back((exe.parent_path() / ".." / "lib" / "omega" / kModuleName).string());
     }
-#ifdef OMEGA_IMAGE_LIBRARY_BUILT
-    paths.emplace_back(OMEGA_IMAGE_LIBRARY_BUILT);  // the build tree: tests and uninstalled binaries
+#if defined(OMEGA_IMAGE_LIBRARY_BUILT) && defined(OMEGA_BUILD_DIR)
+    // The build tree's module, for the programs and tests in that build tree only: an installed
+    // program must not reach into a directory that was only meant to exist on the build machine.
+    if (!ec && inside(exe, OMEGA_BUILD_DIR)) paths.emplace_back(OMEGA_IMAGE_LIBRARY_BUILT);
 #endif
     return paths;
 }

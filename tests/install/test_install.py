@@ -1,0 +1,106 @@
+#!/usr/bin/env python3
+"""`cmake --install` into a scratch prefix, then the installed programs as a user runs them:
+omega finds its image module in PREFIX/lib/omega for a textured render and for `compare`, and
+without it fails alone, naming where it looked and never the build tree.
+
+Usage: test_install.py CMAKE BUILD_DIR
+"""
+import os
+import stat
+import struct
+import subprocess
+import sys
+import tempfile
+import zlib
+
+
+def png(path, w, h, rgb):
+    """An 8-bit RGB PNG, every pixel `rgb`."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    rows = b"".join(b"\0" + bytes(rgb) * w for _ in range(h))
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+SCENE = """omega: 1
+integrator: {type: path, max_depth: 3}
+sensor:
+  type: perspective
+  fov: 40
+  to_world: {look_at: {origin: [0, 0, -3], target: [0, 0, 0], up: [0, 1, 0]}}
+  film: {width: 16, height: 12}
+materials:
+  tex: {type: diffuse, reflectance: {type: bitmap, file: %s}}
+shapes:
+  - {type: sphere, center: [0, 0, 0], radius: 1, material: %s}
+lights:
+  - {type: point, position: [0, 2, -3], intensity: [10, 10, 10]}
+"""
+
+
+def run(cmd, env=None):
+    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, timeout=120)
+    return r.returncode, r.stdout
+
+
+def main():
+    cmake, build = sys.argv[1], os.path.realpath(sys.argv[2])
+    failures = []
+
+    def check(ok, what, detail=""):
+        if not ok:
+            failures.append(what + ("\n" + detail if detail else ""))
+
+    with tempfile.TemporaryDirectory() as tmp:
+        prefix = os.path.join(tmp, "prefix")
+        code, out = run([cmake, "--install", build, "--prefix", prefix])
+        if code != 0:
+            print("cmake --install failed:\n" + out)
+            return 1
+        omega = os.path.join(prefix, "bin", "omega")
+        module = os.path.join(prefix, "lib", "omega", "libomega_images.so")
+        for path in (omega, os.path.join(prefix, "bin", "omegad"), module,
+                     os.path.join(prefix, "lib", "systemd", "system", "omegad.service")):
+            check(os.path.isfile(path), "not installed: " + path)
+        if failures:
+            print("\n".join(failures))
+            return 1
+        # image_library.cpp refuses a module that others could replace.
+        check(os.stat(module).st_mode & (stat.S_IWGRP | stat.S_IWOTH) == 0, "module installed group/other-writable")
+
+        # OMEGA_IMAGE_LIBRARY would decide alone where to look: the test is about the default.
+        env = {k: v for k, v in os.environ.items() if k != "OMEGA_IMAGE_LIBRARY"}
+        png(os.path.join(tmp, "red.png"), 4, 4, (200, 30, 30))
+        textured = os.path.join(tmp, "textured.yaml")
+        with open(textured, "w") as f:
+            f.write(SCENE % ("red.png", "tex"))
+        plain = os.path.join(tmp, "plain.yaml")
+        with open(plain, "w") as f:
+            f.write(SCENE.replace("{type: bitmap, file: %s}", "[0.5, 0.5, 0.5]") % "tex")
+        image = os.path.join(tmp, "out.exr")
+
+        code, out = run([omega, "render", textured, "-o", image, "--spp", "2", "-q"], env)
+        check(code == 0 and os.path.isfile(image), "installed omega could not render a textured scene", out)
+        code, out = run([omega, "compare", image, image], env)
+        check(code == 0 and "RMSE 0 " in out, "installed omega compare failed", out)
+
+        # Without its module the installed omega must not fall back to the build tree's copy.
+        os.remove(module)
+        code, out = run([omega, "render", textured, "-o", image, "--spp", "2", "-q"], env)
+        check(code != 0, "textured render succeeded without the installed module", out)
+        check("cannot load the image library" in out, "no message naming the image library", out)
+        check(os.path.normpath(os.path.join(prefix, "bin", "..", "lib", "omega")) in os.path.normpath(out)
+              or os.path.join(prefix, "bin", "..", "lib", "omega") in out,
+              "the message does not name PREFIX/lib/omega", out)
+        check(build not in out, "the installed program looked in the build tree", out)
+        code, out = run([omega, "render", plain, "-o", image, "--spp", "2", "-q"], env)
+        check(code == 0, "an untextured render needs the image module", out)
+
+    print("\n".join(failures) if failures else "ok: installed omega uses PREFIX/lib/omega and nothing else")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
