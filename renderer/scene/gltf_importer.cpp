@@ -79,20 +79,20 @@ Mat4 to_mat4(const aiMatrix4x4& a) {
     return m;
 }
 
-std::string num(double v) { return fmt::format("{}", v); }
+std::string yaml_number(double v) { return fmt::format("{}", v); }  // shortest round-trip form
 YAML::Node rgb_node(const Rgb& c) {
     YAML::Node n(YAML::NodeType::Sequence);
-    for (int i = 0; i < 3; ++i) n.push_back(num(double(c[i])));
+    for (int i = 0; i < 3; ++i) n.push_back(yaml_number(double(c[i])));
     return n;
 }
 YAML::Node vec_node(const Vec3d& v) {
     YAML::Node n(YAML::NodeType::Sequence);
-    for (double x : {v.x, v.y, v.z}) n.push_back(num(x));
+    for (double x : {v.x, v.y, v.z}) n.push_back(yaml_number(x));
     return n;
 }
 YAML::Node matrix_node(const Mat4& m) {
     YAML::Node l(YAML::NodeType::Sequence);
-    for (double v : m.m) l.push_back(num(std::abs(v) < 1e-15 ? 0.0 : v));
+    for (double v : m.m) l.push_back(yaml_number(std::abs(v) < 1e-15 ? 0.0 : v));
     YAML::Node n(YAML::NodeType::Map);
     n["matrix"] = l;
     return n;
@@ -279,10 +279,10 @@ void GltfImporter::read_camera(const aiScene& s) {
             double yfov = double(c.mHorizontalFOV) / aspect;
             if (cams && size_t(pick) < cams.size() && cams[pick]["perspective"] && cams[pick]["perspective"]["yfov"])
                 yfov = cams[pick]["perspective"]["yfov"].as<double>();
-            y["fov"] = num(yfov * 180 / kPi);
+            y["fov"] = yaml_number(yfov * 180 / kPi);
             y["fov_axis"] = "y";
         }
-        if (c.mClipPlaneNear > 0) y["near_clip"] = num(c.mClipPlaneNear);
+        if (c.mClipPlaneNear > 0) y["near_clip"] = yaml_number(c.mClipPlaneNear);
         y["to_world"] = matrix_node(frame);
     }
     film["width"] = width;
@@ -315,8 +315,8 @@ void GltfImporter::read_lights(const aiScene& s) {
             y["intensity"] = rgb_node(power);
             const double outer = std::clamp(double(l.mAngleOuterCone) * 180 / kPi, 1e-3, 90.0);
             const double inner = std::clamp(double(l.mAngleInnerCone) * 180 / kPi, outer * 1e-3, outer);
-            y["cutoff_angle"] = num(outer);
-            y["beam_width"] = num(inner);
+            y["cutoff_angle"] = yaml_number(outer);
+            y["beam_width"] = yaml_number(inner);
             note("spot lights fall off between the inner and outer cone linearly in angle (Omega's, Mitsuba's), not "
                  "as glTF's square of a ramp linear in cos",
                  object);
@@ -505,7 +505,7 @@ std::string GltfImporter::read_material(const aiMaterial& m, unsigned index, std
         y["type"] = alpha > 0 ? "roughplastic" : "plastic";
         y["int_ior"] = "1.5";
         y["ext_ior"] = "1";
-        if (alpha > 0) y["alpha"] = num(alpha);
+        if (alpha > 0) y["alpha"] = yaml_number(alpha);
         base_ref = image_ref(base_tex, object);
         if (base_ref) {
             YAML::Node b(YAML::NodeType::Map);
@@ -524,7 +524,7 @@ std::string GltfImporter::read_material(const aiMaterial& m, unsigned index, std
              object);
     }
     if (alpha > 0) y["distribution"] = "ggx";
-    if (metallic >= 0.5f && alpha > 0) y["alpha"] = num(alpha);
+    if (metallic >= 0.5f && alpha > 0) y["alpha"] = yaml_number(alpha);
 
     // Emission: emissiveFactor x KHR_materials_emissive_strength (Assimp 5.2 drops the latter),
     // read as radiance in W/(m^2 sr), one to one.
