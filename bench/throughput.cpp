@@ -1,7 +1,8 @@
 // bench/throughput [SCENE] [SPP] [N]: renders a scene (default: the Cornell box) at 256x256 with
 // max_depth 9 and prints samples/s and rays/s for 1, 2, 4, ... N threads (N: every hardware
 // thread), with the speedup over 1 thread next to Embree's own, and each rate against Embree's
-// raw rate for incoherent rays on the same BVH at the same thread count, all in the same run.
+// raw rate for incoherent rays on the same BVH at the same thread count, all in the same run,
+// and the rate of a bare one-ray-at-a-time loop on the same BVH (the ceiling of that design).
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -16,6 +17,7 @@
 
 #include "integrator/render_session.h"
 #include "sampling/rng.h"
+#include "math/frame.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
 #include "scene/scene_parser.h"
@@ -71,6 +73,64 @@ double embree_raw_rate(const Scene& scene, int threads, long long rays) {
     return double(rays) / s;
 }
 
+// The ceiling of a tracer that issues one ray at a time: the same camera rays and, per bounce,
+// one closest hit, one shadow ray (to the scene box's centre) and a cosine-distributed bounce,
+// to max_depth 9 without roulette, with no materials, lights, densities, film or sampler (a PCG
+// stream per pixel). Its rays/s against the raw rate is what the renderer's would be if its own
+// work per ray cost nothing.
+double bare_loop_rate(const Scene& scene, int threads, int spp) {
+    RTCScene rtc = scene.embree_scene();
+    const Sensor& sensor = scene.sensor();
+    const int w = sensor.width, h = sensor.height;
+    const SceneBounds& b = scene.bounds();
+    const Vec3 target = (b.lo + b.hi) * 0.5f;
+    const float eps = 1e-4f * max_component(b.hi - b.lo);
+    tbb::task_arena arena(threads);
+    std::atomic<uint64_t> rays{0};
+    auto t0 = std::chrono::steady_clock::now();
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& r) {
+            uint64_t local = 0;
+            RTCIntersectContext ctx;
+            rtcInitIntersectContext(&ctx);
+            for (int y = r.begin(); y != r.end(); ++y)
+                for (int x = 0; x < w; ++x) {
+                    Rng rng = Rng::for_sample(3, uint64_t(y) * uint64_t(w) + uint64_t(x), 0);
+                    for (int s = 0; s < spp; ++s) {
+                        Ray ray = sensor.generate_ray({x + rng.next_1d(), y + rng.next_1d()}, {0.f, 0.f});
+                        for (int depth = 0; depth < 9; ++depth) {
+                            RTCRayHit rh;
+                            rh.ray.org_x = ray.o.x; rh.ray.org_y = ray.o.y; rh.ray.org_z = ray.o.z;
+                            rh.ray.dir_x = ray.d.x; rh.ray.dir_y = ray.d.y; rh.ray.dir_z = ray.d.z;
+                            rh.ray.tnear = 0; rh.ray.tfar = kInfinity; rh.ray.mask = ~0u; rh.ray.flags = 0; rh.ray.time = 0;
+                            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                            rtcIntersect1(rtc, &ctx, &rh);
+                            ++local;
+                            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+                            Vec3 n = normalize(Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z));
+                            if (dot(n, ray.d) > 0) n = -n;
+                            const Vec3 p = ray.o + ray.d * rh.ray.tfar + n * eps;
+                            RTCRay sr;
+                            const Vec3 to = target - p;
+                            sr.org_x = p.x; sr.org_y = p.y; sr.org_z = p.z;
+                            sr.dir_x = to.x; sr.dir_y = to.y; sr.dir_z = to.z;
+                            sr.tnear = 0; sr.tfar = 1.f; sr.mask = ~0u; sr.flags = 0; sr.time = 0;
+                            rtcOccluded1(rtc, &ctx, &sr);
+                            ++local;
+                            const Vec3 l = square_to_cosine_hemisphere({rng.next_1d(), rng.next_1d()});
+                            const Frame f = Frame::from_normal(n);
+                            ray.o = p;
+                            ray.d = f.to_world(l);
+                        }
+                    }
+                }
+            rays += local;
+        });
+    });
+    double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return double(rays.load()) / secs;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -106,6 +166,10 @@ int main(int argc, char** argv) {
     }
     fmt::print("speedup 1 -> {} threads below 0.9 x {} means something is shared that should not be\n", max_threads,
                max_threads);
+    const double bare = bare_loop_rate(*scene, max_threads, int(std::max(1LL, spp / 4)));
+    fmt::print("bare one-ray loop (Embree, a cosine bounce and a shadow ray per hit, nothing else): {:.3f} Mrays/s, "
+               "{:.3f} of Embree's raw rate: the ceiling for a tracer that issues one ray at a time\n",
+               bare / 1e6, bare / e_max);
 
     // The splatting integrators on the same scene and BVH, all threads, in the same run: their
     // rays/s against Embree's raw rate shows how much of their time is bookkeeping (densities,
