@@ -40,6 +40,15 @@ Rate render_rate(const Scene& scene, int threads, long long spp) {
     return {r.samples_per_s, r.rays_per_s, r.elapsed_s};
 }
 
+// An Embree ray from o along d over [0, tfar), as the renderer fills one (scene.cpp).
+RTCRay embree_ray(const Vec3& o, const Vec3& d, float tfar) {
+    RTCRay r;
+    r.org_x = o.x; r.org_y = o.y; r.org_z = o.z;
+    r.dir_x = d.x; r.dir_y = d.y; r.dir_z = d.z;
+    r.tnear = 0; r.tfar = tfar; r.mask = ~0u; r.flags = 0; r.time = 0; r.id = 0;
+    return r;
+}
+
 // Incoherent closest-hit queries: origins uniform in the scene box, directions uniform on the
 // sphere, one rtcIntersect1 each (the same query the renderer issues).
 double embree_raw_rate(const Scene& scene, int threads, long long rays) {
@@ -59,9 +68,7 @@ double embree_raw_rate(const Scene& scene, int threads, long long rays) {
                 Vec3 o = lo + ext * Vec3(rng.next_1d(), rng.next_1d(), rng.next_1d());
                 Vec3 d = square_to_uniform_sphere({rng.next_1d(), rng.next_1d()});
                 RTCRayHit rh;
-                rh.ray.org_x = o.x; rh.ray.org_y = o.y; rh.ray.org_z = o.z;
-                rh.ray.dir_x = d.x; rh.ray.dir_y = d.y; rh.ray.dir_z = d.z;
-                rh.ray.tnear = 0; rh.ray.tfar = kInfinity; rh.ray.mask = ~0u; rh.ray.flags = 0; rh.ray.time = 0;
+                rh.ray = embree_ray(o, d, kInfinity);
                 rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
                 rtcIntersect1(rtc, &ctx, &rh);
                 local_hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
@@ -100,9 +107,7 @@ double bare_loop_rate(const Scene& scene, int threads, int spp) {
                         Ray ray = sensor.generate_ray({x + rng.next_1d(), y + rng.next_1d()}, {0.f, 0.f});
                         for (int depth = 0; depth < 9; ++depth) {
                             RTCRayHit rh;
-                            rh.ray.org_x = ray.o.x; rh.ray.org_y = ray.o.y; rh.ray.org_z = ray.o.z;
-                            rh.ray.dir_x = ray.d.x; rh.ray.dir_y = ray.d.y; rh.ray.dir_z = ray.d.z;
-                            rh.ray.tnear = 0; rh.ray.tfar = kInfinity; rh.ray.mask = ~0u; rh.ray.flags = 0; rh.ray.time = 0;
+                            rh.ray = embree_ray(ray.o, ray.d, kInfinity);
                             rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
                             rtcIntersect1(rtc, &ctx, &rh);
                             ++local;
@@ -110,11 +115,7 @@ double bare_loop_rate(const Scene& scene, int threads, int spp) {
                             Vec3 n = normalize(Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z));
                             if (dot(n, ray.d) > 0) n = -n;
                             const Vec3 p = ray.o + ray.d * rh.ray.tfar + n * eps;
-                            RTCRay sr;
-                            const Vec3 to = target - p;
-                            sr.org_x = p.x; sr.org_y = p.y; sr.org_z = p.z;
-                            sr.dir_x = to.x; sr.dir_y = to.y; sr.dir_z = to.z;
-                            sr.tnear = 0; sr.tfar = 1.f; sr.mask = ~0u; sr.flags = 0; sr.time = 0;
+                            RTCRay sr = embree_ray(p, target - p, 1.f);
                             rtcOccluded1(rtc, &ctx, &sr);
                             ++local;
                             const Vec3 l = square_to_cosine_hemisphere({rng.next_1d(), rng.next_1d()});
