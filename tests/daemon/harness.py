@@ -28,7 +28,7 @@ def small_cornell(width=80, height=48, spp=16):
 
 
 class Daemon:
-    def __init__(self, workdir, threads=2, config="", state_dir=None, name="omegad", tcp_port=0, listen=()):
+    def __init__(self, workdir, threads=2, config="", state_dir=None, name="omegad", tcp_port=0, listen=(), wrap=()):
         self.workdir = workdir
         self.state_dir = state_dir or os.path.join(workdir, "state")
         self.sock = os.path.join(workdir, name + ".sock")
@@ -39,6 +39,7 @@ class Daemon:
         self.threads = threads
         self.tcp_port = tcp_port  # 0: any free port; a fixed one lets clients reconnect after a restart
         self.listen = list(listen)  # more --listen addresses (e.g. a veth's, for workers in a netns)
+        self.wrap = list(wrap)  # a command that execs omegad (e.g. mdwe_exec.py): same pid, its settings
         self.lines = []
         self.lock = threading.Lock()
         self.proc = None
@@ -50,7 +51,7 @@ class Daemon:
 
     def start(self, timeout=30):
         self.lines = []
-        args = [OMEGAD, "--config", self.config_path, "--state-dir", self.state_dir,
+        args = self.wrap + [OMEGAD, "--config", self.config_path, "--state-dir", self.state_dir,
                 "--listen", self.unix, "--listen", f"tcp:127.0.0.1:{self.tcp_port}", "--threads", str(self.threads)]
         for a in self.listen:
             args += ["--listen", a]

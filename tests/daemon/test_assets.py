@@ -6,8 +6,9 @@ import os
 import shutil
 import struct
 import subprocess
+import sys
 
-from harness import OMEGA, SOURCE_DIR, Daemon, Test, exr_equal, wait_state
+from harness import HERE, OMEGA, SOURCE_DIR, Daemon, Test, exr_equal, wait_state
 
 SPP, SEED = 8, 5
 
@@ -122,6 +123,25 @@ def test_yaml_scene_with_textures_and_envmap(tmp, daemons):
     submit_and_compare(tmp, d, path, 4, "yaml")
 
 
+def test_textured_job_under_memory_deny_write_execute(tmp, daemons):
+    """omegad.service sets MemoryDenyWriteExecute=yes. A textured job makes omegad dlopen its
+    image module and, with it, OpenImageIO's ~250 libraries: none of them may need a writable
+    and executable mapping (text relocations, an executable stack), or the job would fail in
+    production and in no other test."""
+    wrap = [sys.executable, os.path.join(HERE, "mdwe_exec.py")]
+    # The setting survives execve: what the wrapper sets is what omegad runs under.
+    probe = subprocess.run(wrap + [sys.executable, "-c", "import ctypes; print(ctypes.CDLL(None).prctl(66, 0, 0, 0, 0))"],
+                           capture_output=True, text=True, timeout=30)
+    assert probe.returncode == 0 and probe.stdout.strip() == "1", probe.stdout + probe.stderr
+    scene_dir = os.path.join(tmp, "scene")
+    make_files(scene_dir)
+    path = os.path.join(scene_dir, "scene.yaml")
+    write(path, YAML_SCENE)
+    d = Daemon(tmp, wrap=wrap).start()
+    daemons.append(d)
+    submit_and_compare(tmp, d, path, 4, "mdwe")
+
+
 def test_mitsuba_scene_with_texture_and_envmap(tmp, daemons):
     scene_dir = os.path.join(tmp, "scene")
     make_files(scene_dir)
@@ -150,6 +170,7 @@ def test_glb_scene_with_embedded_textures(tmp, daemons):
 if __name__ == "__main__":
     t = Test()
     t.run(test_yaml_scene_with_textures_and_envmap)
+    t.run(test_textured_job_under_memory_deny_write_execute)
     t.run(test_mitsuba_scene_with_texture_and_envmap)
     t.run(test_glb_scene_with_embedded_textures)
     t.exit()

@@ -62,7 +62,9 @@ def main():
         omega = os.path.join(prefix, "bin", "omega")
         module = os.path.join(prefix, "lib", "omega", "libomega_images.so")
         for path in (omega, os.path.join(prefix, "bin", "omegad"), module,
-                     os.path.join(prefix, "lib", "systemd", "system", "omegad.service")):
+                     os.path.join(prefix, "lib", "systemd", "system", "omegad.service"),
+                     os.path.join(prefix, "lib", "systemd", "system", "omegad.socket"),
+                     os.path.join(prefix, "lib", "sysusers.d", "omega.conf")):
             check(os.path.isfile(path), "not installed: " + path)
         if failures:
             print("\n".join(failures))
