@@ -34,6 +34,9 @@ def test_units_verify(tmp, daemons):
     r = subprocess.run([tool, "verify", os.path.join(tmp, "omega-worker.service")], capture_output=True, text=True,
                        timeout=60)
     assert r.returncode == 0, r.stdout + r.stderr
+    for key in ("MemoryDenyWriteExecute=yes", "SystemCallFilter=@system-service", "CapabilityBoundingSet=",
+                "NoNewPrivileges=yes", "ProtectSystem=strict"):
+        assert key in text, "omega-worker.service lacks " + key
     text = open(os.path.join(UNITS, "omegad.service")).read()
     for key in ("Type=notify", "WatchdogSec=", "StateDirectory=omega", "RuntimeDirectory=omega", "NoNewPrivileges=yes",
                 "ProtectSystem=strict", "User=omega"):
