@@ -32,9 +32,9 @@ sensor:
   to_world: {look_at: {origin: [0, 0, -3], target: [0, 0, 0], up: [0, 1, 0]}}
   film: {width: 16, height: 12}
 materials:
-  tex: {type: diffuse, reflectance: {type: bitmap, file: %s}}
+  tex: {type: diffuse, reflectance: %s}
 shapes:
-  - {type: sphere, center: [0, 0, 0], radius: 1, material: %s}
+  - {type: sphere, center: [0, 0, 0], radius: 1, material: tex}
 lights:
   - {type: point, position: [0, 2, -3], intensity: [10, 10, 10]}
 """
@@ -77,10 +77,10 @@ def main():
         png(os.path.join(tmp, "red.png"), 4, 4, (200, 30, 30))
         textured = os.path.join(tmp, "textured.yaml")
         with open(textured, "w") as f:
-            f.write(SCENE % ("red.png", "tex"))
+            f.write(SCENE % "{type: bitmap, file: red.png}")
         plain = os.path.join(tmp, "plain.yaml")
         with open(plain, "w") as f:
-            f.write(SCENE.replace("{type: bitmap, file: %s}", "[0.5, 0.5, 0.5]") % "tex")
+            f.write(SCENE % "[0.5, 0.5, 0.5]")
         image = os.path.join(tmp, "out.exr")
 
         code, out = run([omega, "render", textured, "-o", image, "--spp", "2", "-q"], env)
@@ -93,8 +93,7 @@ def main():
         code, out = run([omega, "render", textured, "-o", image, "--spp", "2", "-q"], env)
         check(code != 0, "textured render succeeded without the installed module", out)
         check("cannot load the image library" in out, "no message naming the image library", out)
-        check(os.path.normpath(os.path.join(prefix, "bin", "..", "lib", "omega")) in os.path.normpath(out)
-              or os.path.join(prefix, "bin", "..", "lib", "omega") in out,
+        check(os.path.join(prefix, "bin", "..", "lib", "omega", "libomega_images.so") in out,
               "the message does not name PREFIX/lib/omega", out)
         check(build not in out, "the installed program looked in the build tree", out)
         code, out = run([omega, "render", plain, "-o", image, "--spp", "2", "-q"], env)
