@@ -262,8 +262,10 @@ def grid_obj(n):
 def test_slow_builds_stop_on_cancel_and_sigterm(tmp, daemons):
     d = Daemon(tmp, config="max_scene_memory_bytes: 17179869184\n").start()
     daemons.append(d)
-    c = d.client()
-    big = grid_obj(300 if SANITIZED else 900)
+    # The submit's reply waits for the validating build: seconds alone, several times that on a
+    # loaded CI machine (a 20 s default once ran out there), so the client waits longer.
+    c = d.client(timeout=120)
+    big = grid_obj(300 if SANITIZED else 600)
     scene = mesh_scene("big.obj").replace(b"spp: 1", b"spp: 1000")
     t0 = time.monotonic()
     h = c.submit(scene, name="slow", assets=[("big.obj", big)], halt_=op.halt(spp=100000))
