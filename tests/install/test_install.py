@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """`cmake --install` into a scratch prefix, then the installed programs as a user runs them:
 omega finds its image module in PREFIX/lib/omega for a textured render and for `compare`, and
-without it fails alone, naming where it looked and never the build tree.
+without it fails alone, naming where it looked and never the build tree. The installed systemd
+units start PREFIX/bin's programs and pass `systemd-analyze verify` as installed, and a prefix
+with a blank gets no units (ExecStart= would split the path).
 
 Usage: test_install.py CMAKE BUILD_DIR
 """
 import os
+import shutil
 import stat
 import struct
 import subprocess
@@ -45,6 +48,25 @@ def run(cmd, env=None):
     return r.returncode, r.stdout
 
 
+def check_units(prefix, check):
+    """The installed units name this prefix's programs and docs, and systemd accepts them."""
+    units = os.path.join(prefix, "lib", "systemd", "system")
+    for name, program in (("omegad.service", "omegad"), ("omega-worker.service", "omega")):
+        with open(os.path.join(units, name)) as f:
+            text = f.read()
+        check(f"\nExecStart={prefix}/bin/{program} " in text, f"{name} does not start PREFIX/bin/{program}", text)
+        docs = [l.split("=file:", 1)[1] for l in text.splitlines() if l.startswith("Documentation=file:")]
+        check(docs and all(d.startswith(prefix + "/") and os.path.isfile(d) for d in docs),
+              f"{name} documents files not installed under PREFIX: {docs}")
+    tool = shutil.which("systemd-analyze")
+    check(tool, "systemd-analyze is not installed (scripts/install-deps installs the systemd package)")
+    if tool:
+        # verify fails when an ExecStart= program does not exist: the units as installed, no edits.
+        code, out = run([tool, "verify"] + [os.path.join(units, n) for n in
+                                            ("omegad.service", "omegad.socket", "omega-worker.service")])
+        check(code == 0, "systemd-analyze verify refuses the installed units", out)
+
+
 def main():
     cmake, build = sys.argv[1], os.path.realpath(sys.argv[2])
     failures = []
@@ -64,11 +86,14 @@ def main():
         for path in (omega, os.path.join(prefix, "bin", "omegad"), module,
                      os.path.join(prefix, "lib", "systemd", "system", "omegad.service"),
                      os.path.join(prefix, "lib", "systemd", "system", "omegad.socket"),
+                     os.path.join(prefix, "lib", "systemd", "system", "omega-worker.service"),
+                     os.path.join(prefix, "share", "doc", "omega", "daemon.md"),
                      os.path.join(prefix, "lib", "sysusers.d", "omega.conf")):
             check(os.path.isfile(path), "not installed: " + path)
         if failures:
             print("\n".join(failures))
             return 1
+        check_units(prefix, check)
         # image_library.cpp refuses a module that others could replace.
         check(os.stat(module).st_mode & (stat.S_IWGRP | stat.S_IWOTH) == 0, "module installed group/other-writable")
 
@@ -98,6 +123,13 @@ def main():
         check(build not in out, "the installed program looked in the build tree", out)
         code, out = run([omega, "render", plain, "-o", image, "--spp", "2", "-q"], env)
         check(code == 0, "an untextured render needs the image module", out)
+
+        blank = os.path.join(tmp, "with blank")
+        code, out = run([cmake, "--install", build, "--prefix", blank])
+        check(code == 0 and os.path.isfile(os.path.join(blank, "bin", "omegad")),
+              "cmake --install into a prefix with a blank failed", out)
+        check(not os.path.exists(os.path.join(blank, "lib", "systemd", "system", "omegad.service"))
+              and "contains a blank" in out, "units installed into a prefix with a blank, or no warning", out)
 
     print("\n".join(failures) if failures else "ok: installed omega uses PREFIX/lib/omega and nothing else")
     return 1 if failures else 0
