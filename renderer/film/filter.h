@@ -6,6 +6,7 @@
 // All filters are separable: f(x, y) = f1(x) f1(y), each axis drawn from one uniform.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "math/vec.h"
 #include "scene/scene_desc.h"
@@ -67,13 +68,22 @@ private:
     double erf_r_ = 1.0;
 };
 
+// The pixels [first, last] of [lo, hi) along one axis whose centre i + 0.5 lies within `radius`
+// of film coordinate p: exactly those where pdf_1d(p - (i + 0.5)) can be non-zero, since the
+// bounds are computed in double, where p - radius - 0.5 is exact for a float p and radius.
+// (floor/ceil of the float sums, used before, took up to 4 pixels per axis where a tent of
+// radius 1 reaches 2: 16 filter weights per splat for 4 non-zero ones.) first > last: none.
+inline std::pair<int, int> filter_span(double p, double radius, int lo, int hi) {
+    return {std::max(lo, int(std::ceil(p - radius - 0.5))), std::min(hi - 1, int(std::floor(p + radius - 0.5)))};
+}
+
 // Calls fn(x, y, weight) for every pixel of `crop` whose filter footprint covers film position
 // p, with the filter's density at p (how a light-tracing splat spreads over pixels).
 template <class Rect, class Fn>
 void for_each_filter_pixel(const Filter& filter, const Rect& crop, Vec2 p, Fn&& fn) {
-    const float r = filter.radius();
-    const int xa = std::max(crop.x0, int(std::floor(p.x - r - 0.5f))), xb = std::min(crop.x1 - 1, int(std::ceil(p.x + r - 0.5f)));
-    const int ya = std::max(crop.y0, int(std::floor(p.y - r - 0.5f))), yb = std::min(crop.y1 - 1, int(std::ceil(p.y + r - 0.5f)));
+    const double r = filter.radius();
+    const auto [xa, xb] = filter_span(p.x, r, crop.x0, crop.x1);
+    const auto [ya, yb] = filter_span(p.y, r, crop.y0, crop.y1);
     // The filter is separable (pdf = pdf_1d(x) pdf_1d(y)): one pdf_1d per column and row, the
     // same products as pdf() gives.
     constexpr int kMaxSide = 16;

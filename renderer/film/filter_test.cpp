@@ -175,6 +175,37 @@ TEST(Filter, CropCoverageShortcutOnlyWhereTheWeightsSumToOne) {
     }
 }
 
+// filter_span (the splat merge's and crop coverage's footprint) holds every pixel with a non-zero
+// weight and none farther than the radius, also where p - r falls on a pixel centre (a tent's
+// zero end, a box's half-weight edge) and far from the origin, where float sums would round.
+TEST(Filter, SpanHoldsExactlyThePixelsWithinTheRadius) {
+    Rng rng(11, 12);
+    const Filter filters[] = {Filter(FilterType::Box, 0.5f), Filter(FilterType::Tent, 1.f), Filter(FilterType::Tent, 1.5f),
+                              Filter(FilterType::Gaussian, 1.5f, 0.5f), Filter(FilterType::Box, 2.25f)};
+    int on_edge = 0;
+    for (const Filter& f : filters) {
+        const double r = f.radius();
+        for (int i = 0; i < 4000; ++i) {
+            const double base = i % 2 ? 0.0 : 1e5;
+            float p = float(base + 40.0 * rng.next_1d());
+            if (i % 4 == 0) p = float(std::floor(base + 40.0 * rng.next_1d()) + 0.5 + r);  // p - r on a centre
+            if (i % 4 == 2) p = float(std::floor(base + 40.0 * rng.next_1d()) + 0.5 - r);  // p + r on a centre
+            const int lo = int(base), hi = int(base) + 40;
+            const auto [a, b] = filter_span(p, r, lo, hi);
+            for (int x = lo; x < hi; ++x) {
+                const double d = double(p) - (x + 0.5);
+                if (x >= a && x <= b) {
+                    ASSERT_LE(std::abs(d), r) << p << " " << x;
+                    on_edge += std::abs(d) == r;
+                } else {
+                    ASSERT_EQ(f.pdf_1d(d), 0.0) << "pixel " << x << " left out of the span of " << p;
+                }
+            }
+        }
+    }
+    EXPECT_GT(on_edge, 1000);  // the edge cases above did land on the radius
+}
+
 TEST(Chi2Util, GammaQMatchesKnownValues) {
     // Q(k/2, x/2) is the chi-square survival function.
     EXPECT_NEAR(film_test::gamma_q(0.5, 3.841458820694124 / 2), 0.05, 1e-9);   // 1 dof

@@ -114,8 +114,7 @@ private:
     // The bands a splat's filter footprint reaches (b0 > b1: none), as for_each_filter_pixel
     // visits its rows.
     std::pair<int, int> band_span(const Splat& sp) const {
-        const int ya = std::max(crop_.y0, int(std::floor(sp.film.y - radius_ - 0.5f)));
-        const int yb = std::min(crop_.y1 - 1, int(std::ceil(sp.film.y + radius_ - 0.5f)));
+        const auto [ya, yb] = filter_span(sp.film.y, radius_, crop_.y0, crop_.y1);
         if (ya > yb) return {1, 0};
         return {(ya - crop_.y0) / rows_, (yb - crop_.y0) / rows_};
     }

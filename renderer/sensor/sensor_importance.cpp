@@ -42,7 +42,7 @@ double Sensor::crop_coverage(Vec2 p) const {
         p.y <= crop.y1 - margin)
         return 1.0;
     auto axis = [&](double x, int lo, int hi) {
-        int a = std::max(lo, int(std::floor(x - filter_radius - 0.5))), b = std::min(hi - 1, int(std::ceil(x + filter_radius - 0.5)));
+        const auto [a, b] = filter_span(x, filter_radius, lo, hi);
         double sum = 0;
         for (int i = a; i <= b; ++i) sum += f.pdf_1d(x - (i + 0.5));
         return sum;
