@@ -175,6 +175,19 @@ TEST(Filter, CropCoverageShortcutOnlyWhereTheWeightsSumToOne) {
     }
 }
 
+TEST(Filter, RoundingToIntMatchesCeilAndFloor) {
+    Rng rng(5, 6);
+    for (int i = 0; i < 100000; ++i) {
+        double x = (rng.next_1d() - 0.5) * (i % 3 == 0 ? 8.0 : 2e9);
+        if (i % 5 == 0) x = std::round(x) + (i % 10 == 0 ? 0.0 : 0.5);  // integers and halves
+        if (i % 7 == 0) x = std::nextafter(std::round(x), i % 2 ? 1e10 : -1e10);  // just past one
+        ASSERT_EQ(ceil_to_int(x), int(std::ceil(x))) << x;
+        ASSERT_EQ(floor_to_int(x), int(std::floor(x))) << x;
+    }
+    EXPECT_EQ(ceil_to_int(-0.0), 0);
+    EXPECT_EQ(floor_to_int(-0.0), 0);
+}
+
 // filter_span (the splat merge's and crop coverage's footprint) holds every pixel with a non-zero
 // weight and none farther than the radius, also where p - r falls on a pixel centre (a tent's
 // zero end, a box's half-weight edge) and far from the origin, where float sums would round.
