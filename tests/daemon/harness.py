@@ -39,7 +39,7 @@ class Daemon:
         self.threads = threads
         self.tcp_port = tcp_port  # 0: any free port; a fixed one lets clients reconnect after a restart
         self.listen = list(listen)  # more --listen addresses (e.g. a veth's, for workers in a netns)
-        self.wrap = list(wrap)  # a command that execs omegad (e.g. mdwe_exec.py): same pid, its settings
+        self.wrap = list(wrap)  # a command that execs omegad (mdwe_exec.py, seccomp_exec.py): same pid, its settings
         self.lines = []
         self.lock = threading.Lock()
         self.proc = None
