@@ -68,14 +68,9 @@ private:
     double erf_r_ = 1.0;
 };
 
-// The pixels [first, last] of [lo, hi) along one axis whose centre i + 0.5 lies within `radius`
-// of film coordinate p: exactly those where pdf_1d(p - (i + 0.5)) can be non-zero, since the
-// bounds are computed in double, where p - radius - 0.5 is exact for a float p and radius.
-// (floor/ceil of the float sums, used before, took up to 4 pixels per axis where a tent of
-// radius 1 reaches 2: 16 filter weights per splat for 4 non-zero ones.) first > last: none.
 // Rounding by truncation and one compare, for values in int's range (as int(std::ceil(x)) needs
-// too): without SSE4.1's roundsd, std::ceil and std::floor are library calls, and these two ran
-// four times per splat (merge and bucketing), 4% of a light-tracing render.
+// too): without SSE4.1's roundsd, std::ceil and std::floor are library calls, four per splat
+// (its merge and its bucketing).
 inline int ceil_to_int(double x) {
     const int i = int(x);
     return i + (double(i) < x);
@@ -84,6 +79,12 @@ inline int floor_to_int(double x) {
     const int i = int(x);
     return i - (double(i) > x);
 }
+
+// The pixels [first, last] of [lo, hi) along one axis whose centre i + 0.5 lies within `radius`
+// of film coordinate p: exactly those where pdf_1d(p - (i + 0.5)) can be non-zero, since the
+// bounds are computed in double, where p - radius - 0.5 is exact for a float p and radius.
+// (floor/ceil of the float sums, used before, took up to 4 pixels per axis where a tent of
+// radius 1 reaches 2: 16 filter weights per splat for 4 non-zero ones.) first > last: none.
 inline std::pair<int, int> filter_span(double p, double radius, int lo, int hi) {
     return {std::max(lo, ceil_to_int(p - radius - 0.5)), std::min(hi - 1, floor_to_int(p + radius - 0.5))};
 }
