@@ -27,8 +27,13 @@ def small_cornell(width=80, height=48, spp=16):
     return text.encode()
 
 
+# TCP tokens of the test users (tcp_users in a test's config) and of the workers' user.
+ALICE, BOB, WORKER = "alice-token-0123456789", "bob-token-0123456789", "worker-token-0123456789"
+
+
 class Daemon:
-    def __init__(self, workdir, threads=2, config="", state_dir=None, name="omegad", tcp_port=0, listen=(), wrap=()):
+    def __init__(self, workdir, threads=2, config="", state_dir=None, name="omegad", tcp_port=0, listen=(), wrap=(),
+                 env=None):
         self.workdir = workdir
         self.state_dir = state_dir or os.path.join(workdir, "state")
         self.sock = os.path.join(workdir, name + ".sock")
@@ -40,6 +45,7 @@ class Daemon:
         self.tcp_port = tcp_port  # 0: any free port; a fixed one lets clients reconnect after a restart
         self.listen = list(listen)  # more --listen addresses (e.g. a veth's, for workers in a netns)
         self.wrap = list(wrap)  # a command that execs omegad (mdwe_exec.py, seccomp_exec.py): same pid, its settings
+        self.env = env  # omegad's environment (None: this process's)
         self.lines = []
         self.lock = threading.Lock()
         self.proc = None
@@ -55,7 +61,7 @@ class Daemon:
                 "--listen", self.unix, "--listen", f"tcp:127.0.0.1:{self.tcp_port}", "--threads", str(self.threads)]
         for a in self.listen:
             args += ["--listen", a]
-        self.proc = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+        self.proc = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, env=self.env)
         threading.Thread(target=self._pump, args=(self.proc,), daemon=True).start()
         m = self.wait_log(r"omegad ready: listening on .*tcp:([0-9.]+:\d+)", timeout)
         self.tcp = "tcp:" + m.group(1)

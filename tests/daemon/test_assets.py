@@ -9,11 +9,10 @@ import struct
 import subprocess
 import sys
 
-from harness import (HERE, OMEGA, SOURCE_DIR, Daemon, Test, check_units_merge, exr_equal, omega, start_worker, tcp_env,
-                     wait_state)
+from harness import (ALICE, HERE, OMEGA, SOURCE_DIR, WORKER, Daemon, Test, check_units_merge, exr_equal, omega,
+                     start_worker, tcp_env, wait_state)
 
 SPP, SEED = 8, 5
-ALICE, WORKER = "alice-token-0123456789", "worker-token-0123456789"
 
 
 def write(path, data):
@@ -150,16 +149,10 @@ def test_textured_jobs_under_the_units_confinement(tmp, daemons):
     write(path, YAML_SCENE)
     # LeakSanitizer (preset asan) stops the threads with ptrace for its check at exit, which
     # @system-service leaves out: the check would hang the exit. The other tests check leaks.
-    saved = os.environ.get("ASAN_OPTIONS")
-    os.environ["ASAN_OPTIONS"] = (saved + ":" if saved else "") + "detect_leaks=0"
-    try:
-        d = Daemon(tmp, wrap=wrap, config=f"tcp_users:\n  alice: {ALICE}\n  farm: {{token: {WORKER}, role: worker}}\n")
-        d.start()
-    finally:
-        if saved is None:
-            del os.environ["ASAN_OPTIONS"]
-        else:
-            os.environ["ASAN_OPTIONS"] = saved
+    asan = os.environ.get("ASAN_OPTIONS")
+    env = dict(os.environ, ASAN_OPTIONS=(asan + ":" if asan else "") + "detect_leaks=0")
+    d = Daemon(tmp, wrap=wrap, env=env,
+               config=f"tcp_users:\n  alice: {ALICE}\n  farm: {{token: {WORKER}, role: worker}}\n").start()
     daemons.append(d)
     submit_and_compare(tmp, d, path, 4, "confined")
     # The same scene as a worker job: the worker receives the four images and decodes them.

@@ -17,9 +17,8 @@ import struct
 import threading
 import time
 
-from harness import Daemon, Test, op, small_cornell, wait_state
+from harness import ALICE, BOB, Daemon, Test, op, small_cornell, wait_state
 
-ALICE, BOB = "alice-token-0123456789", "bob-token-0123456789"
 REFUSED = "is not a submitted asset or a regular file under an allowed root"
 REFUSALS = int(os.environ.get("OMEGA_REFUSALS", "1000"))
 SANITIZED = bool(os.environ.get("OMEGA_SANITIZER"))

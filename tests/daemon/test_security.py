@@ -8,9 +8,10 @@ import struct
 import subprocess
 import time
 
-from harness import OMEGAD, Daemon, Test, op, small_cornell, wait_state
+from harness import ALICE, BOB, OMEGAD, Daemon, Test, op, small_cornell, wait_state
 
-ALICE, BOB, CAROL = "alice-token-0123456789", "bob-token-0123456789", "carol-token-0123456789"
+CAROL = "carol-token-0123456789"
+
 CONFIG = f"""tcp_users: {{alice: {ALICE}, bob: {BOB}, carol: {CAROL}}}
 admins: [carol]
 max_jobs_per_owner: 2

@@ -11,10 +11,9 @@ import signal
 import subprocess
 import time
 
-from harness import (EXR_COMPARE, SLOWDOWN, Daemon, Test, check_units_merge, free_port, merge_units_locally, omega, op,
+from harness import (ALICE, BOB, EXR_COMPARE, SLOWDOWN, WORKER, Daemon, Test, check_units_merge, free_port, merge_units_locally, omega, op,
                      small_cornell, start_worker, tcp_env, wait_file, wait_state)
 
-ALICE, BOB, WORKER = "alice-token-0123456789", "bob-token-0123456789", "worker-token-0123456789"
 CONFIG = f"""tcp_users:
   alice: {ALICE}
   bob: {BOB}

@@ -13,12 +13,12 @@ import re
 import subprocess
 import sys
 
-from harness import OMEGA, Daemon, Test, check_units_merge, free_port, omega, small_cornell, start_worker, tcp_env
+from harness import (ALICE, OMEGA, WORKER, Daemon, Test, check_units_merge, free_port, omega, small_cornell, start_worker,
+                     tcp_env)
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from netns_hosts import NamespacesRefused, NetnsHosts  # noqa: E402
 
-ALICE, WORKER = "alice-token-0123456789", "worker-token-0123456789"
 CONFIG = f"""tcp_users:
   alice: {ALICE}
   farm: {{token: {WORKER}, role: worker}}

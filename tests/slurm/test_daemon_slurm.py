@@ -19,10 +19,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "support"))
 sys.path.insert(0, os.path.join(HERE, "..", "daemon"))
 from slurm_cluster import SlurmCluster, SlurmUnavailable  # noqa: E402
-from harness import (OMEGA, Daemon, Test, check_units_merge, free_port, omega, small_cornell, start_worker,  # noqa: E402
+from harness import (ALICE, OMEGA, WORKER, Daemon, Test, check_units_merge, free_port, omega, small_cornell, start_worker,  # noqa: E402
                      tcp_env, wait_file)
 
-ALICE, WORKER = "alice-token-0123456789", "worker-token-0123456789"
 SANITIZED = bool(os.environ.get("OMEGA_SANITIZER"))
 W, H, UNIT, UNITS = (48, 32, 8, 12) if SANITIZED else (160, 120, 48, 14)
 SPP = UNIT * UNITS
