@@ -6,6 +6,7 @@
 #include "pathspace/measure.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
+#include "scene/shape_area_sample.h"
 
 namespace omega {
 
@@ -105,27 +106,23 @@ std::optional<LightSample> light_sample_li(const Scene& scene, const Light& ligh
             ls.n = sh.flip_normals ? -sp->n : sp->n;
             ls.p_error = abs(ls.p) * gamma_bound(5);
             ls.pdf_sa = sp->pdf_sa;
+            Vec3 d = ls.p - ref;
+            float dist = length(d);
+            if (!(dist > 0)) return std::nullopt;
+            ls.wi = d / dist;
         } else {
-            float u_tri;
-            size_t t = sh.tri_by_area.sample(u.x, &u_tri);
-            Vec2 b = square_to_uniform_triangle({u_tri, u.y});
-            const auto& m = sh.mesh;
-            const Vec3 &p0 = m.positions[m.indices[3 * t]], &p1 = m.positions[m.indices[3 * t + 1]],
-                       &p2 = m.positions[m.indices[3 * t + 2]];
-            float b2 = std::max(0.f, 1.f - b.x - b.y);
-            ls.p = p0 * b.x + p1 * b.y + p2 * b2;
-            ls.p_error = (abs(p0 * b.x) + abs(p1 * b.y) + abs(p2 * b2)) * gamma_bound(6);
-            ls.n = sh.face_normals[t];
+            const AreaPoint q = sample_shape_area(sh, u);
+            ls.p = q.p;
+            ls.p_error = q.p_error;
+            ls.n = sh.face_normals[q.tri];
+            // One square root for the direction and the density's cosine.
             Vec3 d = ls.p - ref;
             float dist2 = length_sq(d);
-            if (dist2 == 0) return std::nullopt;
-            ls.pdf_sa = convert_area_to_sa(sh.inv_area, dist2, absdot(ls.n, d / std::sqrt(dist2)));
+            if (!(dist2 > 0)) return std::nullopt;
+            ls.wi = d / std::sqrt(dist2);
+            ls.pdf_sa = convert_area_to_sa(sh.inv_area, dist2, absdot(ls.n, ls.wi));
             if (ls.pdf_sa == 0) return std::nullopt;
         }
-        Vec3 d = ls.p - ref;
-        float dist = length(d);
-        if (!(dist > 0)) return std::nullopt;
-        ls.wi = d / dist;
         if (!(a->two_sided || dot(ls.n, -ls.wi) > 0)) return std::nullopt;
         ls.Li = a->radiance;
         return ls;

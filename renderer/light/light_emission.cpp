@@ -5,6 +5,7 @@
 #include "math/float_bits.h"
 #include "sampling/warp.h"
 #include "scene/scene.h"
+#include "scene/shape_area_sample.h"
 #include "scene/spawn.h"
 
 namespace omega {
@@ -42,17 +43,11 @@ std::optional<LightEmission> light_sample_le(const Scene& scene, const Light& li
             o.ng = o.ns = sh.flip_normals ? -n : n;
             o.planar = false;
         } else {
-            float u_tri;
-            size_t t = sh.tri_by_area.sample(u_pos.x, &u_tri);
-            Vec2 b = square_to_uniform_triangle({u_tri, u_pos.y});
-            const auto& m = sh.mesh;
-            const Vec3 &p0 = m.positions[m.indices[3 * t]], &p1 = m.positions[m.indices[3 * t + 1]],
-                       &p2 = m.positions[m.indices[3 * t + 2]];
-            float b2 = std::max(0.f, 1.f - b.x - b.y);
-            o.p = p0 * b.x + p1 * b.y + p2 * b2;
-            o.p_error = (abs(p0 * b.x) + abs(p1 * b.y) + abs(p2 * b2)) * gamma_bound(6);
-            o.ng = o.ns = sh.face_normals[t];
-            o.prim = uint32_t(t);
+            const AreaPoint q = sample_shape_area(sh, u_pos);
+            o.p = q.p;
+            o.p_error = q.p_error;
+            o.ng = o.ns = sh.face_normals[q.tri];
+            o.prim = q.tri;
             o.planar = true;
         }
         e.pdf_pos = 1.0 / sh.area;

@@ -9,7 +9,7 @@
 namespace omega {
 namespace {
 
-constexpr int kTests = 7;
+constexpr int kTests = 8;
 
 // Density of direction w from ref under "pick a light by power, then sample it".
 double traced_pdf_sa(const Scene& scene, const Vec3& ref, const Vec3& w) {
@@ -143,8 +143,26 @@ TEST(LightSamplingChi2, TiltedOneSidedRectangle) {
                                       Mat4::scale({1.5, 0.7, 1}),
                                   false));
     auto scene = Scene::build(d);
+    ASSERT_TRUE(scene->shapes()[0].parallelogram);
     auto r = run(*scene, {0, 0, 0}, 4);
     test::print_result("tilted rectangle", r);
+    EXPECT_TRUE(r.passed) << r.message;
+}
+
+TEST(LightSamplingChi2, ShearedRectangleWithFlippedNormals) {
+    // A parallelogram that is no rectangle, sampled as one (scene/parallelogram.h), with the
+    // winding reversed by flip_normals.
+    SceneDesc d = base();
+    Mat4 shear;
+    shear(0, 1) = 0.7;
+    d.shapes.push_back(rect_light(Mat4::translate({-0.2, 0.1, 1.2}) * Mat4::rotate({0.3, 1, 0}, 20) * shear *
+                                      Mat4::scale({1.2, 0.5, 1}),
+                                  true));
+    d.shapes.back().flip_normals = true;
+    auto scene = Scene::build(d);
+    ASSERT_TRUE(scene->shapes()[0].parallelogram);
+    auto r = run(*scene, {0, 0, 0}, 8);
+    test::print_result("sheared rectangle", r);
     EXPECT_TRUE(r.passed) << r.message;
 }
 
@@ -155,6 +173,7 @@ TEST(LightSamplingChi2, DiskMeshByArea) {
     disk.type = ShapeType::Disk;
     d.shapes.push_back(disk);
     auto scene = Scene::build(d);
+    ASSERT_FALSE(scene->shapes()[0].parallelogram);
     auto r = run(*scene, {0.4f, 0, 0}, 5);
     test::print_result("disk mesh", r);
     EXPECT_TRUE(r.passed) << r.message;

@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "math/vec.h"
 #include "sampling/distribution.h"
 #include "scene/ray.h"
+#include "scene/parallelogram.h"
 #include "scene/scene_desc.h"
 #include "scene/sphere_geometry.h"
 #include "scene/triangle_mesh.h"
@@ -53,6 +55,7 @@ struct Shape {
     double area = 0;                     // world-space surface area
     float inv_area = 0;                  // float(1 / area): light sampling's density, without a division per sample
     DiscreteDistribution tri_by_area;    // triangles, for uniform area sampling
+    std::optional<Parallelogram> parallelogram;  // an emitter that is one: sampled as it instead
     std::string name;                    // for messages: "shapes[3]"
 };
 

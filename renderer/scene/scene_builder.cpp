@@ -289,6 +289,7 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
             throw SceneError(fmt::format("{}: {}: a mask (opacity) on an emitting shape is not supported", where(sd.loc),
                                          sh.name));
         if (sd.emitter && !is_black(sd.emitter->radiance)) {
+            if (sh.kind == ShapeKind::Triangles) sh.parallelogram = find_parallelogram(sh.mesh);
             sh.light = int32_t(s->lights_.size());
             s->lights_.push_back(AreaLight{uint32_t(i), sd.emitter->radiance, sd.emitter->two_sided});
         }
