@@ -250,7 +250,9 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
                 case ShapeType::Disk: sh.mesh = make_disk(); break;
                 case ShapeType::Sphere: break;
             }
-            if (sd.face_normals) sh.mesh.normals.clear();
+            // The rectangle, cube and disk are flat per triangle: their vertex normals are the face
+            // normals, so interpolating them per hit (and normalizing) would only add rounding.
+            if (sd.face_normals || sd.type != ShapeType::Mesh) sh.mesh.normals.clear();
             if (sh.bump_tex && sd.type == ShapeType::Disk)
                 throw SceneError(fmt::format("{}: {}: a bump map on a disk is not supported; use a mesh", where(sd.loc), sh.name));
             if (textured(sh.material)) sh.uv_map = sd.type == ShapeType::Disk ? UvMap::Disk : UvMap::Vertex;
