@@ -205,8 +205,8 @@ void Importer::read_sensor(pugi::xml_node n) {
         if (ftype != "hdrfilm" && !ldr)
             warn(film_el, fkey, "film '" + ftype + "' is not supported; using an RGB EXR film");
         lines["film"] = line_of(film_el);
-        if (auto c = find_param(f, "width")) width = int(number(c, fkey));
-        if (auto c = find_param(f, "height")) height = int(number(c, fkey));
+        if (auto c = find_param(f, "width")) width = integer(c, fkey);
+        if (auto c = find_param(f, "height")) height = integer(c, fkey);
         for (const char* fmt_key : {"file_format", "pixel_format", "component_format"}) {
             if (auto c = find_param(f, fmt_key)) {
                 std::string v = attr(c, "value", fkey);
@@ -220,10 +220,10 @@ void Importer::read_sensor(pugi::xml_node n) {
                 (void)find_param(f, p);
         int cx = 0, cy = 0, cw = width, ch = height;
         bool crop = false;
-        if (auto c = find_param(f, "crop_offset_x")) cx = int(number(c, fkey)), crop = true;
-        if (auto c = find_param(f, "crop_offset_y")) cy = int(number(c, fkey)), crop = true;
-        if (auto c = find_param(f, "crop_width")) cw = int(number(c, fkey)), crop = true;
-        if (auto c = find_param(f, "crop_height")) ch = int(number(c, fkey)), crop = true;
+        if (auto c = find_param(f, "crop_offset_x")) cx = integer(c, fkey), crop = true;
+        if (auto c = find_param(f, "crop_offset_y")) cy = integer(c, fkey), crop = true;
+        if (auto c = find_param(f, "crop_width")) cw = integer(c, fkey), crop = true;
+        if (auto c = find_param(f, "crop_height")) ch = integer(c, fkey), crop = true;
         if (crop) {
             YAML::Node cr(YAML::NodeType::Sequence);
             for (int v : {cx, cy, cx + cw, cy + ch}) cr.push_back(v);

@@ -149,6 +149,14 @@ private:
         return {};
     }
     double number(pugi::xml_node c, const std::string& key) const { return to_double(attr(c, "value", key), c, key); }
+    // A film size or offset: int(x) of a value past int's range is undefined, so it is refused
+    // here with the file and line (the film's own checks bound it further).
+    int integer(pugi::xml_node c, const std::string& key) const {
+        const double v = number(c, key);
+        if (!(v >= -2147483648.0 && v < 2147483648.0))
+            fail(c, key, fmt::format("'{}' must be an integer within +-2^31, got {}", c.attribute("name").value(), v));
+        return int(v);
+    }
     // A scalar value as YAML text, checked by the section parsers later.
     YAML::Node scalar(pugi::xml_node c, const std::string& key) const {
         std::string t = c.name();

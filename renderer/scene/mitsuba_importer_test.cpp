@@ -561,6 +561,17 @@ TEST(MitsubaImporter, ValueErrorsNameTheParameterLine) {
               "scene.xml:3: shape[0].filename: cannot open 'nope.obj': No such file or directory");
 }
 
+// Found by fuzz_mitsuba_xml: a film size past int's range was converted with int(), which is
+// undefined (UBSan: "1.44444e+10 is outside the range of representable values of type 'int'").
+TEST(MitsubaImporter, FilmSizesPastIntRangeAreErrorsWithTheirLine) {
+    for (const char* name : {"width", "height", "crop_offset_x", "crop_width"}) {
+        const std::string e = import_error(std::string("<sensor type=\"perspective\"><film type=\"hdrfilm\">\n<integer name=\"") +
+                                           name + "\" value=\"14444444446\"/></film></sensor>");
+        EXPECT_NE(e.find("scene.xml:3: "), std::string::npos) << e;
+        EXPECT_NE(e.find(std::string("'") + name + "' must be an integer within +-2^31, got 14444444446"), std::string::npos) << e;
+    }
+}
+
 TEST(MitsubaImporter, EmittersAndSensors) {
     SceneDesc d = import(R"(
 <sensor type="thinlens"><float name="fov" value="40"/><string name="fov_axis" value="y"/>
