@@ -1,6 +1,6 @@
 #include "scene/parallelogram.h"
 
-#include <array>
+#include <algorithm>
 #include <cmath>
 
 namespace omega {
@@ -32,10 +32,11 @@ std::optional<Parallelogram> find_parallelogram(const TriangleMesh& m) {
             q.o = m.positions[i];
             q.e1 = m.positions[far1] - m.positions[i];
             q.e2 = m.positions[far0] - m.positions[i];
-            const Vec3d o(q.o), e1(q.e1), e2(q.e2);
-            const std::array<Vec3d, 3> miss{abs(o + e1 - pf1), abs(o + e2 - pf0), abs(o + e1 + e2 - pj)};
-            Vec3d worst(0.0);
-            for (const Vec3d& d : miss) worst = Vec3d(std::max(worst.x, d.x), std::max(worst.y, d.y), std::max(worst.z, d.z));
+            const Vec3d e1(q.e1), e2(q.e2);
+            const auto max3 = [](const Vec3d& a, const Vec3d& b) {
+                return Vec3d(std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z));
+            };
+            const Vec3d worst = max3(max3(abs(pi + e1 - pf1), abs(pi + e2 - pf0)), abs(pi + e1 + e2 - pj));
             const double scale = max_component(abs(pi) + abs(pj) + abs(pf0) + abs(pf1));
             if (!(max_component(worst) <= kRelativeSlack * scale)) return std::nullopt;
             const double area = length(cross(e1, e2));
