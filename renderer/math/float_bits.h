@@ -41,4 +41,24 @@ inline float next_float_toward(float v, float dir) {
     return std::bit_cast<float>(r);
 }
 
+// Four lanes of float and of their bits (GCC and Clang vector extensions; SSE2 on x86-64).
+using F4 = float __attribute__((vector_size(16)));
+using U4 = uint32_t __attribute__((vector_size(16)));
+using I4 = int32_t __attribute__((vector_size(16)));
+
+// next_float_toward on four lanes of bits at once, the same selects bit for bit: the ray spawn
+// steps all three axes of a point, and the scalar form took ~30 instructions an axis (7% of the
+// path tracer's instructions went to offset_ray_origin).
+inline U4 next_float_toward4(U4 ui, F4 dir) {
+    const U4 up = (U4)(dir > F4{});                // all ones where dir > 0
+    const U4 negative = (U4)((I4)ui >> 31);        // all ones where v's sign bit is set
+    const U4 away = up ^ negative;                 // all ones where the step leaves zero behind
+    U4 r = ui - 1u - 2u * away;                    // ui + 1 away from zero, ui - 1 towards it
+    const U4 magnitude = ui & 0x7fffffffu;
+    const U4 zero = (U4)(magnitude == 0u);
+    r = (zero & (0x80000001u & ~(up & 0x80000000u))) | (~zero & r);
+    const U4 keep = ((U4)(magnitude == 0x7f800000u) & away) | (U4)(dir == F4{});
+    return (keep & ui) | (~keep & r);
+}
+
 }  // namespace omega
