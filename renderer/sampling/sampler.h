@@ -126,6 +126,16 @@ constexpr uint32_t dim1_reversed(uint32_t i) {
 }
 constexpr uint32_t dim1(uint32_t i) { return reverse_bits(dim1_reversed(i)); }
 
+// reverse_bits of both 32-bit halves at once, each in place: one byte swap and three mask steps
+// for two values (a draw's x and y), where two reverse_bits took two of each.
+constexpr uint64_t reverse_bits_halves(uint64_t x) {
+    x = __builtin_bswap64(x);
+    x = (x >> 32) | (x << 32);  // the swap also exchanged the halves: put them back
+    x = ((x >> 1) & 0x5555555555555555ull) | ((x & 0x5555555555555555ull) << 1);
+    x = ((x >> 2) & 0x3333333333333333ull) | ((x & 0x3333333333333333ull) << 2);
+    return ((x >> 4) & 0x0f0f0f0f0f0f0f0full) | ((x & 0x0f0f0f0f0f0f0f0full) << 4);
+}
+
 // [0, 1): the top 24 bits, so a float never rounds up to 1.
 constexpr float to_unit(uint32_t x) { return float(x >> 8) * 0x1p-24f; }
 
@@ -140,8 +150,15 @@ public:
         if (type == SamplerType::Independent) return Sampler(Rng::for_sample(seed, stream, index));
         // Past 2^32 samples the Sobol' index wraps; the upper bits then go into the hash, so
         // every block of 2^32 samples is a fresh randomisation (still unbiased).
-        Sampler s(Rng::for_sample(seed ^ 0x50b01f5eedULL, stream, index));
+        Sampler s;
         s.type_ = SamplerType::Sobol;
+        // Its PCG stream, Rng::for_sample(seed ^ 0x50b01f5eed, stream, index), serves only draws
+        // past the dimension layout (rare after roulette): seeded on first use, not per sample
+        // (seeding took ~110 instructions, a third of a path tracer's set-up per sample).
+        s.beyond_seed_ = seed ^ 0x50b01f5eedULL;
+        s.beyond_stream_ = stream;
+        s.beyond_index_ = index;
+        s.rng_ready_ = false;
         s.index_reversed_ = sobol::reverse_bits(uint32_t(index));
         s.key_ = hash3(seed, stream, index >> 32);
         return s;
@@ -156,7 +173,7 @@ public:
     //   i' = owen(i, a) = rev(LK_a(rev(i)));  x = owen(dim0(i'), b) = rev(LK_b(i'));
     //   y = owen(dim1(i'), c) = rev(LK_c(rev(dim1(i')))). sampler_test checks them against owen().
     float next_1d() {
-        if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) return rng_.next_1d();
+        if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) return rng().next_1d();
         const uint64_t h = mix64(key_ ^ (uint64_t(dim_) * 0x9e3779b97f4a7c15ULL));
         ++dim_;
         const uint32_t i = shuffled(uint32_t(h));
@@ -167,7 +184,7 @@ public:
     // just moves past its dimension, which it would have hashed and scrambled for nothing; the
     // independent one still draws, so its stream, and every image made with it, stays as it was.
     void skip_1d() {
-        if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) rng_.next_1d();
+        if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) rng().next_1d();
         else ++dim_;
     }
     // next_1d() where the decision is `needed`, else skip_1d() and 0.
@@ -188,8 +205,9 @@ public:
 
     Vec2 next_2d() {
         if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) {
-            float a = rng_.next_1d();
-            return {a, rng_.next_1d()};
+            Rng& r = rng();
+            float a = r.next_1d();
+            return {a, r.next_1d()};
         }
         const uint64_t h = mix64(key_ ^ (uint64_t(dim_) * 0x9e3779b97f4a7c15ULL));
         // A third seed from the same hash by one more multiply: the scrambles only need distinct,
@@ -197,8 +215,11 @@ public:
         const uint32_t c = uint32_t(((h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ULL) >> 32);
         dim_ += 2;
         const uint32_t i = shuffled(uint32_t(h));
-        return {sobol::to_unit(sobol::reverse_bits(sobol::laine_karras(i, uint32_t(h >> 32)))),
-                sobol::to_unit(sobol::reverse_bits(sobol::laine_karras(sobol::dim1_reversed(i), c)))};
+        // x = rev(LK_b(i)) in the low half, y = rev(LK_c(dim1_rev(i))) in the high one.
+        const uint64_t xy = sobol::reverse_bits_halves(
+            uint64_t(sobol::laine_karras(i, uint32_t(h >> 32))) |
+            uint64_t(sobol::laine_karras(sobol::dim1_reversed(i), c)) << 32);
+        return {sobol::to_unit(uint32_t(xy)), sobol::to_unit(uint32_t(xy >> 32))};
     }
 
 private:
@@ -206,10 +227,22 @@ private:
         return sobol::reverse_bits(sobol::laine_karras(index_reversed_, seed));  // = owen(index, seed)
     }
 
-    SamplerType type_;
+    Sampler() = default;
+    // The independent stream; for sobol, seeded from beyond_* on the first draw past the layout.
+    Rng& rng() {
+        if (!rng_ready_) {
+            rng_ = Rng::for_sample(beyond_seed_, beyond_stream_, beyond_index_);
+            rng_ready_ = true;
+        }
+        return rng_;
+    }
+
+    SamplerType type_ = SamplerType::Independent;
     uint32_t index_reversed_ = 0;  // sobol: the sample index modulo 2^32, bit-reversed
     uint32_t dim_ = 0;    // sobol: the dimension of the next draw
     uint64_t key_ = 0;    // sobol: hash of (seed, stream, index / 2^32)
+    bool rng_ready_ = true;  // rng_ is seeded (always, for independent)
+    uint64_t beyond_seed_ = 0, beyond_stream_ = 0, beyond_index_ = 0;  // sobol: rng_'s seed
     Rng rng_;             // independent; sobol past the dimension layout
 };
 

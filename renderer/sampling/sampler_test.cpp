@@ -132,6 +132,11 @@ TEST(SobolSampler, FastPathEqualsThePlainFormulas) {
     // next_1d/next_2d cancel bit reversals and use a table for dimension 1; the plain
     // composition i' = owen(i), x = owen(dim0(i')), y = owen(dim1(i')) must give the same bits.
     for (uint32_t i = 0; i < 4096; i += 7) EXPECT_EQ(sobol::dim1(i * 2654435761u), sobol::dim1_by_bits(i * 2654435761u));
+    for (uint64_t x : {0ull, 1ull, 0x8000000000000001ull, 0x0123456789abcdefull, ~0ull, 0xdeadbeef00c0ffeeull}) {
+        const uint64_t r = sobol::reverse_bits_halves(x);
+        EXPECT_EQ(uint32_t(r), sobol::reverse_bits(uint32_t(x))) << x;
+        EXPECT_EQ(uint32_t(r >> 32), sobol::reverse_bits(uint32_t(x >> 32))) << x;
+    }
     for (uint64_t index : {0ull, 1ull, 77ull, 1000003ull, (1ull << 32) + 5})
         for (uint32_t dim : {dims::kFilm, dims::kLens, kDeepPair}) {
             const uint64_t h = mix64(hash3(8, 21, index >> 32) ^ (uint64_t(dim) * 0x9e3779b97f4a7c15ULL));
@@ -174,6 +179,34 @@ TEST(SobolSampler, BeyondTheLayoutDrawsIndependentNumbers) {
         ++count[size_t(u * 64)];
     }
     EXPECT_LT(chi_square(count, 256.0), chi_bound(64));
+}
+
+TEST(SobolSampler, BeyondTheLayoutIsItsOwnPcgStreamWhereverItStarts) {
+    // The stream is seeded on the first draw past the layout: it must be the same stream, in
+    // call order, whether that draw comes first, after draws in the layout, or in a copy.
+    for (uint64_t index : {0ull, 5ull, (1ull << 32) + 9}) {
+        Rng ref = Rng::for_sample(6 ^ 0x50b01f5eedULL, 42, index);
+        const float r0 = ref.next_1d(), r1 = ref.next_1d(), r2 = ref.next_1d(), r3 = ref.next_1d();
+        Sampler a = Sampler::make(SamplerType::Sobol, 6, 42, index);
+        a.start_dimension(dims::kBeyond);
+        EXPECT_EQ(a.next_1d(), r0);
+        const Vec2 u = a.next_2d();
+        EXPECT_EQ(u.x, r1);
+        EXPECT_EQ(u.y, r2);
+        Sampler b = Sampler::make(SamplerType::Sobol, 6, 42, index);
+        b.start_dimension(dims::kFilm);
+        const Vec2 film = b.next_2d();
+        b.start_dimension(dims::kBeyond);
+        Sampler copy = b;  // not yet seeded: the copy seeds its own, the same
+        b.skip_1d();
+        EXPECT_EQ(b.next_1d(), r1);
+        EXPECT_EQ(copy.next_1d(), r0);
+        b.start_dimension(dims::kFilm);
+        EXPECT_EQ(b.next_2d().x, film.x);  // the layout's draws do not depend on the stream
+        b.start_dimension(dims::kBeyond);
+        EXPECT_EQ(b.next_1d(), r2);  // and the stream goes on where it was
+        EXPECT_EQ(b.next_1d(), r3);
+    }
 }
 
 TEST(IndependentSampler, IsTheOldPcgStream) {

@@ -33,6 +33,7 @@ Sensor Sensor::from_desc(const SensorDesc& d) {
     s.to_world = *Transform::make(d.to_world);  // the parser rejects singular matrices
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 4; ++c) s.m[r * 4 + c] = float(d.to_world(r, c));
+    s.local_origin = s.local_point({0.f, 0.f, 0.f});
     s.width = d.film.width;
     s.height = d.film.height;
     s.near_clip = d.near_clip;
@@ -81,9 +82,7 @@ Ray Sensor::generate_ray(Vec2 film, Vec2 u_lens) const {
         o_local = {q.x, q.y, 0.f};
         d_local = {0.f, 0.f, 1.f};
     }
-    Vec3 o{m[0] * o_local.x + m[1] * o_local.y + m[2] * o_local.z + m[3],
-           m[4] * o_local.x + m[5] * o_local.y + m[6] * o_local.z + m[7],
-           m[8] * o_local.x + m[9] * o_local.y + m[10] * o_local.z + m[11]};
+    Vec3 o = local_point(o_local);
     Vec3 d = normalize(Vec3{m[0] * d_local.x + m[1] * d_local.y + m[2] * d_local.z,
                             m[4] * d_local.x + m[5] * d_local.y + m[6] * d_local.z,
                             m[8] * d_local.x + m[9] * d_local.y + m[10] * d_local.z});

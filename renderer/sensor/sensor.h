@@ -34,6 +34,14 @@ struct Sensor {
     std::variant<PerspectiveSensor, ThinLensSensor, OrthographicSensor> model;
     Transform to_world;
     float m[12] = {};  // to_world's top 3x4 rows in float, for the per-sample ray
+    // local_point({0, 0, 0}), computed once by from_desc: a pinhole's position, where every
+    // perspective connection to the sensor ends (light tracing asked for it per vertex).
+    Vec3 local_origin;
+    // A point of the camera's local frame in world space, in float through m (rays, lens points).
+    Vec3 local_point(const Vec3& p) const {
+        return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+                m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
+    }
     int width = 1, height = 1;
     float near_clip = 0;
 

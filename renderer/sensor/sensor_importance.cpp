@@ -14,15 +14,6 @@
 
 namespace omega {
 
-namespace {
-
-Vec3 mul_point(const float* m, const Vec3& p) {
-    return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
-            m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
-}
-
-}  // namespace
-
 bool filter_sums_to_one(const Filter& f) {
     const double r = f.radius();
     for (int i = 0; i < 64; ++i) {
@@ -99,7 +90,7 @@ std::optional<Sensor::Connection> Sensor::sample_wi(const Vec3& ref, Vec2 u_lens
         if (rl.z <= 0) return std::nullopt;
         c.film = film_plane::to_film(rl.x, rl.y, o->half_x, o->half_y, width, height);
         if (!film_plane::near_crop(crop, c.film, filter_radius)) return std::nullopt;
-        c.p = mul_point(m, {rl.x, rl.y, 0.f});
+        c.p = local_point({rl.x, rl.y, 0.f});
         Vec3 d = c.p - ref;
         c.dist = length(d);
         if (!(c.dist > 0)) return std::nullopt;
@@ -111,6 +102,7 @@ std::optional<Sensor::Connection> Sensor::sample_wi(const Vec3& ref, Vec2 u_lens
     float ex, ey;
     Vec3 lens_local{0, 0, 0};
     float focus = 1.f;
+    const bool pinhole = std::holds_alternative<PerspectiveSensor>(model);
     if (auto* p = std::get_if<PerspectiveSensor>(&model)) {
         ex = p->tan_half_x;
         ey = p->tan_half_y;
@@ -130,7 +122,7 @@ std::optional<Sensor::Connection> Sensor::sample_wi(const Vec3& ref, Vec2 u_lens
     Vec2 q{(lens_local.x + dl.x * t) / focus, (lens_local.y + dl.y * t) / focus};
     c.film = film_plane::to_film(q.x, q.y, ex, ey, width, height);
     if (!film_plane::near_crop(crop, c.film, filter_radius)) return std::nullopt;
-    c.p = mul_point(m, lens_local);
+    c.p = pinhole ? local_origin : local_point(lens_local);  // the same bits: lens_local is 0
     Vec3 d = c.p - ref;
     c.dist = length(d);
     if (!(c.dist > 0)) return std::nullopt;
