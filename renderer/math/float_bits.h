@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <limits>
 
+#include "math/simd4.h"
+
 namespace omega {
 
 constexpr float kMachineEps = std::numeric_limits<float>::epsilon() * 0.5f;
@@ -40,11 +42,6 @@ inline float next_float_toward(float v, float dir) {
     r = dir == 0 ? ui : r;
     return std::bit_cast<float>(r);
 }
-
-// Four lanes of float and of their bits (GCC and Clang vector extensions; SSE2 on x86-64).
-using F4 = float __attribute__((vector_size(16)));
-using U4 = uint32_t __attribute__((vector_size(16)));
-using I4 = int32_t __attribute__((vector_size(16)));
 
 // next_float_toward on four lanes of bits at once, the same selects bit for bit: the ray spawn
 // steps all three axes of a point, and the scalar form took ~30 instructions an axis (7% of the

@@ -21,7 +21,7 @@ DiscreteDistribution::DiscreteDistribution(const std::vector<double>& weights) {
     cdf_.back() = 1.0;
 }
 
-size_t DiscreteDistribution::sample(float u, float* u_remapped) const {
+size_t DiscreteDistribution::search(float u, float* u_remapped) const {
     // The first entry above u (upper_bound), clamped to the last. Most distributions here are a
     // light's few triangles or a scene's few lights: counting the entries not above u (the cdf
     // is non-decreasing, so that is the same entry) has no branch to mispredict, where a

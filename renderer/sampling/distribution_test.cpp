@@ -106,6 +106,15 @@ TEST(DiscreteDistribution, DegenerateInputs) {
     EXPECT_TRUE(DiscreteDistribution({0.0, 0.0}).empty());
     DiscreteDistribution one({0.0, 5.0, 0.0});
     for (float u : {0.f, 0.3f, 0.999999f}) EXPECT_EQ(one.sample(u), 1u);
+    // One item (a scene's one light) skips the search: the same index, and remapping still works.
+    DiscreteDistribution single({2.5});
+    for (float u : {0.f, 0.3f, 0.999999f}) {
+        EXPECT_EQ(single.sample(u), 0u);
+        float r = -1.f;
+        EXPECT_EQ(single.sample(u, &r), 0u);
+        EXPECT_EQ(r, u);
+    }
+    EXPECT_EQ(single.pmf(0), 1.f);
 }
 
 }  // namespace

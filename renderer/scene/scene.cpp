@@ -196,9 +196,11 @@ bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
             b2 /= s;
         }
         float b0 = 1.f - b1 - b2;
-        // Barycentric interpolation, with its bound (pbrt-v4 eq. 6.x: gamma_7 * sum |b_i p_i|).
-        hit.p = p0 * b0 + p1 * b1 + p2 * b2;
-        hit.p_error = (abs(p0 * b0) + abs(p1 * b1) + abs(p2 * b2)) * gamma_bound(7);
+        // Barycentric interpolation, with its bound (pbrt-v4 eq. 6.x: gamma_7 * sum |b_i p_i|),
+        // the axes in one vector: the same roundings as p0 * b0 + p1 * b1 + p2 * b2 per axis.
+        const F4 t0 = to_f4(p0) * b0, t1 = to_f4(p1) * b1, t2 = to_f4(p2) * b2;
+        hit.p = to_vec3(t0 + t1 + t2);
+        hit.p_error = to_vec3((abs4(t0) + abs4(t1) + abs4(t2)) * gamma_bound(7));
         Vec3 ng = sh.face_normals[hit.prim];
         if (!m.normals.empty()) {
             Vec3 ns = m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2;

@@ -11,11 +11,10 @@ namespace omega {
 // p + n d and next_float_toward per axis, bit for bit (spawn_test checks it).
 inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& n, const Vec3& w) {
     const float d = dot(abs(n), p_error);
-    F4 offset = F4{n.x, n.y, n.z, 0.f} * d;
+    F4 offset = to_f4(n) * d;
     if (dot(w, n) < 0) offset = (F4)((U4)offset ^ 0x80000000u);  // -offset, as a sign flip
-    const F4 po = F4{p.x, p.y, p.z, 0.f} + offset;
-    const F4 r = (F4)next_float_toward4((U4)po, offset);
-    return {r[0], r[1], r[2]};
+    const F4 po = to_f4(p) + offset;
+    return to_vec3((F4)next_float_toward4((U4)po, offset));
 }
 
 // A direction counts as leaving on the side the shading frame says only if the geometric normal
