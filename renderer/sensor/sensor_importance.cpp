@@ -102,8 +102,9 @@ std::optional<Sensor::Connection> Sensor::sample_wi(const Vec3& ref, Vec2 u_lens
     float ex, ey;
     Vec3 lens_local{0, 0, 0};
     float focus = 1.f;
-    const bool pinhole = std::holds_alternative<PerspectiveSensor>(model);
+    bool pinhole = false;
     if (auto* p = std::get_if<PerspectiveSensor>(&model)) {
+        pinhole = true;
         ex = p->tan_half_x;
         ey = p->tan_half_y;
     } else {
