@@ -67,6 +67,9 @@ public:
 
     const StrategySet& strategies() const { return set_; }
     const StrategyPlan& plan() const { return plan_; }
+    // Whether sample() reads its camera ray: not for the light tracer, whose every strategy
+    // starts at the light (t <= 1), so its driver need not make one.
+    bool uses_camera_ray() const { return camera_limits_.max_vertices > 0; }
 
 private:
     const Scene& scene_;

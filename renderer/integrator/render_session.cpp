@@ -95,6 +95,9 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
     const Rect crop = film_.crop();
     const Sensor& sensor = scene_.sensor();
     const bool lens = sensor.uses_lens_sample();  // asked once, not per sample
+    // The light tracer makes no camera ray: its film and lens numbers are skipped, which draws
+    // the same numbers from the independent stream as before (the sobol sampler only moves on).
+    const bool camera_ray = bdpt_->uses_camera_ray();
     const uint64_t width = uint64_t(sensor.width);
     const double inv_light_paths_per_sample = 1.0 / double(std::max<long long>(1, crop.area()));
     std::vector<Vec3d>& sums = batch_sums_;
@@ -150,10 +153,10 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                                     Sampler sampler =
                                         Sampler::make(settings_.integrator.sampler, settings_.seed, pixel, uint64_t(i));
                                     sampler.start_dimension(dims::kFilm);
-                                    Vec2 u_film = sampler.next_2d();
+                                    Vec2 u_film = sampler.next_2d_if(camera_ray);
                                     sampler.start_dimension(dims::kLens);
-                                    Vec2 u_lens = sampler.next_2d_if(lens);
-                                    Ray ray = sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens);
+                                    Vec2 u_lens = sampler.next_2d_if(lens && camera_ray);
+                                    Ray ray = camera_ray ? sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens) : Ray{};
                                     local.clear();
                                     if (per) per->clear();
                                     Rgb L = bdpt_->sample(ray, sampler, st, scratch, local, per);
