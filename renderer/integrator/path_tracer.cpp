@@ -18,10 +18,14 @@ Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const
     const auto& sel = scene_.light_selection();
     if (sel.empty()) return Rgb(0.f);
     float u_sel = sampler.next_1d_if(sel.size() > 1);  // one light: nothing to choose
-    Vec2 u = sampler.next_2d();
     size_t li = sel.sample(u_sel);
-    float pmf = sel.pmf(li);
     const Light& light = scene_.lights()[li];
+    if (light_faces_away(scene_, light, hit.p)) {  // no sample of it could contribute
+        sampler.skip_2d();
+        return Rgb(0.f);
+    }
+    Vec2 u = sampler.next_2d();
+    float pmf = sel.pmf(li);
     auto ls = light_sample_li(scene_, light, hit.p, u);
     if (!ls || ls->pdf_sa <= 0 || is_black(ls->Li)) return Rgb(0.f);
     Vec3 wi_local = shading.to_local(ls->wi);

@@ -95,6 +95,13 @@ Rgb area_light_le(const AreaLight& light, const SurfaceHit& hit, const Vec3& w) 
     return Rgb(0.f);
 }
 
+bool light_faces_away(const Scene& scene, const Light& light, const Vec3& ref) {
+    const auto* a = std::get_if<AreaLight>(&light);
+    if (!a || a->two_sided) return false;
+    const auto& plane = scene.shapes()[a->shape].emitter_plane;
+    return plane && behind(*plane, ref);
+}
+
 std::optional<LightSample> light_sample_li(const Scene& scene, const Light& light, const Vec3& ref, Vec2 u) {
     if (auto* a = std::get_if<AreaLight>(&light)) {
         const Shape& sh = scene.shapes()[a->shape];

@@ -58,6 +58,9 @@ struct LightSample {
 };
 
 std::optional<LightSample> light_sample_li(const Scene& scene, const Light& light, const Vec3& ref_p, Vec2 u);
+// True where light_sample_li(scene, light, ref_p, u) fails for every u because ref_p lies behind
+// a one-sided flat area light (light/emitter_plane.h): next-event estimation can skip it there.
+bool light_faces_away(const Scene& scene, const Light& light, const Vec3& ref_p);
 // Density (solid angle at ref_p) with which light_sample_li would pick the point `hit` on an area light.
 float light_pdf_li_sa(const Scene& scene, const AreaLight& light, const Vec3& ref_p, const SurfaceHit& hit);
 // Constant environment: density of direction wi.

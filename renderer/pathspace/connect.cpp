@@ -218,8 +218,12 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         if (sel.empty()) return std::nullopt;
         sampler.start_dimension(dims::connect_light(t));
         size_t li = sel.sample(sampler.next_1d_if(sel.size() > 1));
-        double pmf = sel.pmf(li);
         const Light& l = scene.lights()[li];
+        if (light_faces_away(scene, l, z.p())) {  // every light sample would be refused
+            sampler.skip_2d();
+            return std::nullopt;
+        }
+        double pmf = sel.pmf(li);
         auto ls = light_sample_li(scene, l, z.p(), sampler.next_2d());
         if (!ls || ls->pdf_sa <= 0 || is_black(ls->Li)) return std::nullopt;
         sampled = light_sample_vertex(li, *ls);

@@ -187,6 +187,12 @@ public:
         if (type_ == SamplerType::Independent || dim_ == dims::kBeyond) rng().next_1d();
         else ++dim_;
     }
+    // A 2D decision this sample turned out not to need: two skip_1d(), which draws from the
+    // independent stream exactly what next_2d() would have.
+    void skip_2d() {
+        skip_1d();
+        skip_1d();
+    }
     // next_1d() where the decision is `needed`, else skip_1d() and 0.
     float next_1d_if(bool needed) {
         if (needed) return next_1d();
@@ -198,8 +204,7 @@ public:
     // aperture), else the pair's skip and (0, 0): the same values and stream as skip_1d() twice.
     Vec2 next_2d_if(bool needed) {
         if (needed) return next_2d();
-        skip_1d();
-        skip_1d();
+        skip_2d();
         return {0.f, 0.f};
     }
 

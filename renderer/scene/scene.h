@@ -15,6 +15,7 @@
 #include "math/vec.h"
 #include "sampling/distribution.h"
 #include "scene/ray.h"
+#include "light/emitter_plane.h"
 #include "scene/parallelogram.h"
 #include "scene/scene_desc.h"
 #include "scene/sphere_geometry.h"
@@ -56,6 +57,7 @@ struct Shape {
     float inv_area = 0;                  // float(1 / area): light sampling's density, without a division per sample
     DiscreteDistribution tri_by_area;    // triangles, for uniform area sampling
     std::optional<Parallelogram> parallelogram;  // an emitter that is one: sampled as it instead
+    std::optional<EmitterPlane> emitter_plane;   // a one-sided flat emitter: NEE skips points behind it
     std::string name;                    // for messages: "shapes[3]"
 };
 

@@ -292,6 +292,8 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& desc, const std::function<b
                                          sh.name));
         if (sd.emitter && !is_black(sd.emitter->radiance)) {
             if (sh.kind == ShapeKind::Triangles) sh.parallelogram = find_parallelogram(sh.mesh);
+            if (sh.kind == ShapeKind::Triangles && !sd.emitter->two_sided)
+                sh.emitter_plane = find_emitter_plane(sh.mesh, sh.face_normals);
             sh.light = int32_t(s->lights_.size());
             s->lights_.push_back(AreaLight{uint32_t(i), sd.emitter->radiance, sd.emitter->two_sided});
         }
