@@ -1,13 +1,17 @@
-// bench/throughput [SCENE] [SPP] [N]: renders a scene (default: the Cornell box) at 256x256 with
-// max_depth 9 and prints samples/s and rays/s for 1, 2, 4, ... N threads (N: every hardware
-// thread), with the speedup over 1 thread next to Embree's own, and each rate against Embree's
-// raw rate for incoherent rays on the same BVH at the same thread count, all in the same run,
-// and the rate of a bare one-ray-at-a-time loop on the same BVH (the ceiling of that design).
+// bench/throughput [SCENE] [SPP] [N] [REPEATS]: renders a scene (default: the Cornell box) at
+// 256x256 with max_depth 9 and prints samples/s and rays/s for 1, 2, 4, ... N threads (N: every
+// hardware thread), with the speedup over 1 thread next to Embree's own, and each rate against
+// Embree's raw rate for incoherent rays on the same BVH at the same thread count, all in the same
+// run, and the rate of a bare one-ray-at-a-time loop on the same BVH (the ceiling of that design).
+// Every figure is the median of REPEATS (default 3) measurements, each renderer run alternating
+// with an Embree run; a ratio is the median of those pairs' ratios, with their range beside it,
+// so one disturbed run on a shared machine neither moves the figure nor goes unseen.
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -132,6 +136,35 @@ double bare_loop_rate(const Scene& scene, int threads, int spp) {
     return double(rays.load()) / secs;
 }
 
+struct Spread {
+    double median, lo, hi;
+};
+Spread spread(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return {n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]), v.front(), v.back()};
+}
+
+// REPEATS renders, each followed by Embree's raw rate for at least 1.5x its rays (1e6 per thread
+// at the least), so a ratio always compares two measurements taken back to back.
+struct Paired {
+    Spread samples_per_s, rays_per_s, embree, ratio;
+};
+Paired paired_rates(const Scene& scene, int threads, long long spp, int repeats) {
+    std::vector<double> samples, rays, embree, ratio;
+    for (int k = 0; k < repeats; ++k) {
+        const Rate r = render_rate(scene, threads, spp);
+        const double e = embree_raw_rate(scene, threads, (long long)std::max(1e6 * threads, r.rays_per_s * 1.5));
+        samples.push_back(r.samples_per_s);
+        rays.push_back(r.rays_per_s);
+        embree.push_back(e);
+        ratio.push_back(r.rays_per_s / e);
+    }
+    return {spread(samples), spread(rays), spread(embree), spread(ratio)};
+}
+
+std::string range(const Spread& s) { return fmt::format("{:.3f}-{:.3f}", s.lo, s.hi); }
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -139,6 +172,7 @@ int main(int argc, char** argv) {
     long long spp = argc > 2 ? std::stoll(argv[2]) : 32;
     // Thread counts 1, 2, 4, ... up to N (argv[3], default: every hardware thread), N included.
     const int max_threads = argc > 3 ? std::max(1, std::stoi(argv[3])) : std::max(1, int(std::thread::hardware_concurrency()));
+    const int repeats = argc > 4 ? std::max(1, std::stoi(argv[4])) : 3;
     std::vector<int> counts;
     for (int n = 1; n < max_threads; n *= 2) counts.push_back(n);
     counts.push_back(max_threads);
@@ -150,24 +184,25 @@ int main(int argc, char** argv) {
     auto scene = Scene::build(desc);
 
     render_rate(*scene, max_threads, 2);  // warm-up: page in the BVH and the allocator
-    fmt::print("scene {}  256x256  max_depth 9  {} spp\n", path, spp);
-    fmt::print("{:>10} {:>14} {:>14} {:>16} {:>12} {:>18} {:>16}\n", "threads", "Msamples/s", "Mrays/s", "Embree Mrays/s",
-               "ratio", "speedup renderer", "speedup Embree");
-    Rate r1{};
-    double e1 = 0, e_max = 0;
+    fmt::print("scene {}  256x256  max_depth 9  {} spp  medians of {} alternating runs\n", path, spp, repeats);
+    fmt::print("{:>10} {:>14} {:>14} {:>16} {:>12} {:>14} {:>18} {:>16}\n", "threads", "Msamples/s", "Mrays/s",
+               "Embree Mrays/s", "ratio", "ratio range", "speedup renderer", "speedup Embree");
+    Paired p1{};
+    double e_max = 0;
     for (int n : counts) {
         // Each count renders the same samples, so the speedup is a ratio of rates in this run.
-        Rate r = render_rate(*scene, n, spp);
-        long long raw_rays = (long long)std::max(1e6 * n, r.rays_per_s * 1.5);
-        double e = embree_raw_rate(*scene, n, raw_rays);
-        if (n == 1) r1 = r, e1 = e;
-        e_max = e;
-        fmt::print("{:>10} {:>14.3f} {:>14.3f} {:>16.3f} {:>12.3f} {:>18.2f} {:>16.2f}\n", n, r.samples_per_s / 1e6,
-                   r.rays_per_s / 1e6, e / 1e6, r.rays_per_s / e, r.samples_per_s / r1.samples_per_s, e / e1);
+        const Paired p = paired_rates(*scene, n, spp, repeats);
+        if (n == 1) p1 = p;
+        e_max = p.embree.median;
+        fmt::print("{:>10} {:>14.3f} {:>14.3f} {:>16.3f} {:>12.3f} {:>14} {:>18.2f} {:>16.2f}\n", n,
+                   p.samples_per_s.median / 1e6, p.rays_per_s.median / 1e6, p.embree.median / 1e6, p.ratio.median,
+                   range(p.ratio), p.samples_per_s.median / p1.samples_per_s.median, p.embree.median / p1.embree.median);
     }
     fmt::print("speedup 1 -> {} threads below 0.9 x {} means something is shared that should not be\n", max_threads,
                max_threads);
-    const double bare = bare_loop_rate(*scene, max_threads, int(std::max(1LL, spp / 4)));
+    std::vector<double> bares;
+    for (int k = 0; k < repeats; ++k) bares.push_back(bare_loop_rate(*scene, max_threads, int(std::max(1LL, spp / 4))));
+    const double bare = spread(bares).median;
     fmt::print("bare one-ray loop (Embree, a cosine bounce and a shadow ray per hit, nothing else): {:.3f} Mrays/s, "
                "{:.3f} of Embree's raw rate: the ceiling for a tracer that issues one ray at a time\n",
                bare / 1e6, bare / e_max);
@@ -175,19 +210,19 @@ int main(int argc, char** argv) {
     // The splatting integrators on the same scene and BVH, all threads, in the same run: their
     // rays/s against Embree's raw rate shows how much of their time is bookkeeping (densities,
     // MIS, splats) rather than ray queries.
-    Rate path_max = render_rate(*scene, max_threads, std::max(1LL, spp / 8));
-    fmt::print("{:>10} {:>14} {:>14} {:>16} {:>12} {:>14}\n", "integrator", "Msamples/s", "Mrays/s", "rays/sample",
-               "vs Embree", "samples vs path");
-    std::vector<std::pair<IntegratorType, Rate>> rates{{IntegratorType::Path, path_max}};
-    for (IntegratorType t : {IntegratorType::Light, IntegratorType::Bdpt}) {
+    fmt::print("{:>10} {:>14} {:>14} {:>16} {:>12} {:>14} {:>14}\n", "integrator", "Msamples/s", "Mrays/s", "rays/sample",
+               "vs Embree", "range", "samples vs path");
+    std::vector<std::pair<IntegratorType, Paired>> rates;
+    for (IntegratorType t : {IntegratorType::Path, IntegratorType::Light, IntegratorType::Bdpt}) {
         SceneDesc d = desc;
         d.integrator.type = t;
         auto sc = Scene::build(d);
-        Rate r = render_rate(*sc, max_threads, std::max(1LL, spp / 8));
-        fmt::print("{:>10} {:>14.3f} {:>14.3f} {:>16.1f} {:>12.3f} {:>14.3f}\n", integrator_name(t), r.samples_per_s / 1e6,
-                   r.rays_per_s / 1e6, r.rays_per_s / r.samples_per_s, r.rays_per_s / e_max,
-                   r.samples_per_s / path_max.samples_per_s);
-        rates.emplace_back(t, r);
+        const Paired p = paired_rates(*sc, max_threads, std::max(1LL, spp / 8), repeats);
+        const double path_samples = rates.empty() ? p.samples_per_s.median : rates.front().second.samples_per_s.median;
+        fmt::print("{:>10} {:>14.3f} {:>14.3f} {:>16.1f} {:>12.3f} {:>14} {:>14.3f}\n", integrator_name(t),
+                   p.samples_per_s.median / 1e6, p.rays_per_s.median / 1e6, p.rays_per_s.median / p.samples_per_s.median,
+                   p.ratio.median, range(p.ratio), p.samples_per_s.median / path_samples);
+        rates.emplace_back(t, p);
     }
 
     // What the targets (issue 12: 0.85 of Embree's raw rate for path, 0.6 for the others) ask of
@@ -197,11 +232,11 @@ int main(int argc, char** argv) {
     fmt::print("ns per ray per thread: Embree raw {:.0f}, bare loop {:.0f}\n", ns(e_max), ns(bare));
     fmt::print("{:>10} {:>8} {:>12} {:>14} {:>14} {:>12}\n", "integrator", "target", "ns per ray", "own work (ns)",
                "allowed (ns)", "cut needed");
-    for (const auto& [t, r] : rates) {
+    for (const auto& [t, p] : rates) {
         const double target = t == IntegratorType::Path ? 0.85 : 0.6;
-        const double own = ns(r.rays_per_s) - ns(bare), allowed = ns(e_max) / target - ns(bare);
+        const double own = ns(p.rays_per_s.median) - ns(bare), allowed = ns(p.embree.median) / target - ns(bare);
         fmt::print("{:>10} {:>8.2f} {:>12.0f} {:>14.0f} {:>14.0f} {:>11.0f}%\n", integrator_name(t), target,
-                   ns(r.rays_per_s), own, allowed, own > allowed ? 100.0 * (1.0 - allowed / own) : 0.0);
+                   ns(p.rays_per_s.median), own, allowed, own > allowed ? 100.0 * (1.0 - allowed / own) : 0.0);
     }
     return 0;
 }
