@@ -10,16 +10,19 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 
 #include "scene/scene_error.h"
+#include "scene/test_helpers.h"
 #include "stability_util.h"
 
 namespace omega {
 namespace {
 
-std::string write_cube_obj(bool with_degenerate) {
-    std::string path = ::testing::TempDir() + (with_degenerate ? "omega_stab_cube_degenerate.obj" : "omega_stab_cube.obj");
-    std::ofstream f(path);
+// Each test writes into its own folder: ctest runs the path/light/bdpt instances of one test at
+// once, and a shared file name let one truncate the mesh another was loading.
+std::string write_cube_obj(const test::TempDir& dir, bool with_degenerate) {
+    std::ostringstream f;
     f << "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n";
     if (with_degenerate) f << "v 0 -1 -1\n";  // 9: the midpoint of edge 1-2
     // Outward winding.
@@ -30,7 +33,7 @@ std::string write_cube_obj(bool with_degenerate) {
          "f 1 5 8\nf 1 8 4\n"   // x = -1
          "f 2 3 7\nf 2 7 6\n";  // x = +1
     if (with_degenerate) f << "f 1 1 3\nf 1 9 2\nf 7 7 7\n";
-    return path;
+    return dir.write(with_degenerate ? "cube_degenerate.obj" : "cube.obj", f.str()).string();
 }
 
 SceneDesc mesh_furnace(const std::string& file, IntegratorType type, float rho, float le, bool two_sided) {
@@ -56,8 +59,9 @@ class ClosedMesh : public ::testing::TestWithParam<IntegratorType> {};
 TEST_P(ClosedMesh, CameraInsideSeesTheFurnace) {
     const float rho = 0.8f, le = 0.5f;
     const double expected = double(le) / (1.0 - double(rho));
+    const test::TempDir tmp;
     for (bool degenerate : {false, true}) {
-        SceneDesc d = mesh_furnace(write_cube_obj(degenerate), GetParam(), rho, le, true);
+        SceneDesc d = mesh_furnace(write_cube_obj(tmp, degenerate), GetParam(), rho, le, true);
         d.shapes[0].drop_degenerate = degenerate;
         auto r = test::render(d, spp_for(GetParam()), 71);
         stability::expect_finite(r, "closed mesh");
@@ -73,7 +77,8 @@ TEST_P(ClosedMesh, CameraInsideSeesTheFurnace) {
 // A one-sided emitter facing outward lights nothing inside; flipped, it lights the interior.
 TEST_P(ClosedMesh, LightFacingAwayIsDarkFlippedIsNot) {
     const float rho = 0.8f, le = 0.5f;
-    SceneDesc d = mesh_furnace(write_cube_obj(false), GetParam(), rho, le, false);
+    const test::TempDir tmp;
+    SceneDesc d = mesh_furnace(write_cube_obj(tmp, false), GetParam(), rho, le, false);
     auto r = test::render(d, spp_for(GetParam()), 72);
     stability::expect_finite(r, "facing away");
     double expected = double(le) / (1.0 - double(rho));
@@ -98,7 +103,8 @@ INSTANTIATE_TEST_SUITE_P(Integrators, ClosedMesh,
 // Exported meshes routinely hold zero-area triangles: by default they are dropped and counted in
 // one warning naming the shape and the file; drop_degenerate: false restores the strict error.
 TEST(ZeroAreaTriangles, AreDroppedWithOneWarningByDefault) {
-    SceneDesc d = mesh_furnace(write_cube_obj(true), IntegratorType::Path, 0.8f, 0.5f, true);
+    const test::TempDir tmp;
+    SceneDesc d = mesh_furnace(write_cube_obj(tmp, true), IntegratorType::Path, 0.8f, 0.5f, true);
     d.shapes[0].name = "DoorHandle";
     d.shapes[0].written = "door.obj";
     ASSERT_TRUE(d.shapes[0].drop_degenerate);
@@ -122,12 +128,11 @@ TEST(ZeroAreaTriangles, AreDroppedWithOneWarningByDefault) {
 // A NaN or infinite vertex would render a wrong image: always an error naming the file and the
 // first triangle that uses it. One no triangle uses is harmless.
 TEST(NonFiniteVertices, AreAnErrorNamingFileAndTriangle) {
-    const std::string path = ::testing::TempDir() + "omega_stab_nan_vertex.obj";
-    {
-        std::ofstream f(path);
-        f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 1 1\nv 1 inf 1\n"
-             "f 1 2 3\nf 1 3 2\nf 2 4 3\n";
-    }
+    const test::TempDir tmp;
+    const std::string path = tmp.write("nan_vertex.obj",
+                                       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 1 1\nv 1 inf 1\n"
+                                       "f 1 2 3\nf 1 3 2\nf 2 4 3\n")
+                                 .string();
     SceneDesc d = mesh_furnace(path, IntegratorType::Path, 0.8f, 0.5f, true);
     d.shapes[0].written = "nan.obj";
     for (bool drop : {true, false}) {
@@ -181,12 +186,12 @@ TEST(LightsFacingAway, OpenSceneIsBlack) {
 
 TEST(ClosedMeshSanity, DetectsALeak) {
     // A mesh furnace with one face missing leaks energy: caught against the closed form.
-    std::string path = ::testing::TempDir() + "omega_stab_cube_open.obj";
-    {
-        std::ofstream f(path);
-        f << "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n";
-        f << "f 1 4 3\nf 1 3 2\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
-    }
+    const test::TempDir tmp;
+    const std::string path =
+        tmp.write("cube_open.obj",
+                  "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+                  "f 1 4 3\nf 1 3 2\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n")
+            .string();
     auto r = test::render(mesh_furnace(path, IntegratorType::Path, 0.8f, 0.5f, true), 64, 76);
     EXPECT_GT(stability::z_with_slack(r.film(), 0.5 / (1.0 - 0.8)), test::z_threshold(1));
 }
