@@ -9,7 +9,8 @@
 namespace omega {
 
 EdgeDensities edge_densities(const Scene& scene, const PathVertex& a, const PathVertex* a2, const PathVertex& b,
-                             const PathVertex* b2, int s, int t, const VertexLocal* la, const VertexLocal* lb) {
+                             const PathVertex* b2, int s, int t, const VertexLocal* la, const VertexLocal* lb,
+                             const Sensor::Pdf* b_we) {
     EdgeDensities e;
     // The connection scatters at a and b through eval(), i.e. their non-delta lobes, whatever
     // lobe their own walks sampled next: a BSDF that mixes a delta lobe with others (smooth
@@ -34,7 +35,7 @@ EdgeDensities edge_densities(const Scene& scene, const PathVertex& a, const Path
     VertexLocal local_a, local_b;
     if (s >= 2 && !la) la = &(local_a = {a.shading.to_local(a.wo), a.shading.to_local(ab)});
     if (t >= 2 && !lb) lb = &(local_b = {b.shading.to_local(b.wo), b.shading.to_local(-ab)});
-    if (t == 1) e.sensor_a = sensor_density_at(scene, b, a);
+    if (t == 1) e.sensor_a = b_we ? to_area_density(b, b_we->dir, a) : sensor_density_at(scene, b, a);
     else e.sensor_a = through_b(to_area_density(b, pdf(b, lb->wo, lb->w), a));
     if (a2) e.sensor_a2 = through_a(to_area_density(a, pdf(a, la->w, la->wo), *a2));
     if (s == 1) e.light_b = emission_density_at(scene, a, b);

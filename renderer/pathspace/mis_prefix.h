@@ -19,6 +19,7 @@
 
 #include "pathspace/subpath.h"
 #include "pathspace/vertex.h"
+#include "sensor/sensor.h"
 
 namespace omega {
 
@@ -35,9 +36,11 @@ struct EdgeDensities {
 };
 // a2 = v_{s-2} (null for s = 1), b2 = v_{s+1} (null for t = 1). la / lb, when given, are a's and
 // b's VertexLocal for the edge (w = direction(a, b) at a, its opposite at b): the same numbers.
+// b_we, when given (t = 1, a sensor with directions), is the sensor's pdf_we(b, direction(b, a)),
+// which the connection computed already: -wi of sample_wi is that direction, bit for bit.
 EdgeDensities edge_densities(const Scene& scene, const PathVertex& a, const PathVertex* a2, const PathVertex& b,
                              const PathVertex* b2, int s, int t, const VertexLocal* la = nullptr,
-                             const VertexLocal* lb = nullptr);
+                             const VertexLocal* lb = nullptr, const Sensor::Pdf* b_we = nullptr);
 
 // Per thread; the BDPT tracer prepares it after each sample's walks and resets it after its
 // connections. connect() uses it only when it was prepared for the very subpaths it is given.
