@@ -34,15 +34,15 @@ public:
     double pdf(double x, double y) const { return pdf_1d(x) * pdf_1d(y); }
     // Inline: the splat merge and the sensor's crop coverage call it per pixel.
     double pdf_1d(double x) const {
-        const double r = radius_;
-        if (std::abs(x) > r) return 0.0;
+        const double r = radius_, ax = std::abs(x);
         // A splat exactly on the border between two pixels (a focused point on a pixel corner,
         // or a position rounded onto the float grid far from the origin) is shared half and
         // half: the pixels' weights still sum to 1, and rounding to nearest moves no mass across
         // the border on average. (Giving it to both read ~2x; to one side only shifted every
-        // border by half a float spacing, +0.5% at an offset of 1e5.)
-        const double edge = std::abs(x) == r ? 0.5 : 1.0;
-        return edge * pdf_1d_inside(x);
+        // border by half a float spacing, +0.5% at an offset of 1e5.) One branch for both
+        // border cases: the merge calls this for every column and row of every splat.
+        if (ax >= r) return ax > r ? 0.0 : 0.5 * pdf_1d_inside(x);
+        return pdf_1d_inside(x);
     }
 
 private:
