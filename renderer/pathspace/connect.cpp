@@ -167,7 +167,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
     VertexLocal ly, lz;  // s, t >= 2: both ends in their shading frames, for f and the densities
     const PathVertex* sampled_light = nullptr;
     const PathVertex* sampled_sensor = nullptr;
-    Sensor::Pdf sensor_we;  // t = 1: the sensor's pdf_we towards y, read again by the MIS weight
+    std::optional<Sensor::Pdf> sensor_we;  // t = 1: the sensor's pdf_we towards y, read again by the MIS weight
     if (s == 0) {
         // The camera subpath's last vertex is on a light.
         if (t < 2) return std::nullopt;
@@ -194,7 +194,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
                 sampled->pdf_fwd = 1.0;
             } else {
                 sensor_we = sensor.pdf_we(sc->p, -sc->wi);
-                sampled->pdf_fwd = sensor_we.pos;
+                sampled->pdf_fwd = sensor_we->pos;
             }
             sampled_sensor = &*sampled;
         }
@@ -276,7 +276,7 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         if (s >= 1)
             e = edge_densities(scene, a, s >= 2 ? &light[size_t(s - 2)] : nullptr, b, t >= 2 ? &camera[size_t(t - 2)] : nullptr,
                                s, t, s >= 2 && t >= 2 ? &ly : nullptr, s >= 2 && t >= 2 ? &lz : nullptr,
-                               t == 1 && sampled_sensor && !scene.sensor().delta_direction() ? &sensor_we : nullptr);
+                               sensor_we ? &*sensor_we : nullptr);
         w = mis_weight_prefixed(scene, cstats.prefix, s, t, e, sampled_light, sampled_sensor);
     } else {
         FullPathPdfs& fp = cstats.table;
