@@ -13,8 +13,11 @@ namespace {
 // Veach's correction for shading normals in adjoint transport: keeps light tracing consistent
 // with radiance transport when ns != ng.
 float shading_correction(const PathVertex& v, const Vec3& wo, const Vec3& wi) {
-    float num = absdot(wo, v.hit.ns) * absdot(wi, v.hit.ng);
-    float den = absdot(wo, v.hit.ng) * absdot(wi, v.hit.ns);
+    const float den = absdot(wo, v.hit.ng) * absdot(wi, v.hit.ns);
+    // Without shading normals (ns is ng, bit for bit) num is den, the same products in the same
+    // order, so the ratio is exactly 1: skip the division (BDPT evaluates this per connection).
+    if (v.hit.ns == v.hit.ng) return den > 0 ? 1.f : 0.f;
+    const float num = absdot(wo, v.hit.ns) * absdot(wi, v.hit.ng);
     return den > 0 ? num / den : 0.f;
 }
 
