@@ -164,6 +164,13 @@ std::optional<std::string> FieldReader::scalar_string(const std::string& path, c
     fail(DecodeError::out_of_range, path, "longer than " + std::to_string(max_len) + " bytes");
     return std::nullopt;
   }
+  // The header text is UTF-8, but a double-quoted scalar's escapes (\N, \x85) unescape to bare
+  // bytes that are not: such a string could not be sent on, since our own encoder writes it
+  // raw and the peer would refuse the frame (found by fuzz_messages).
+  if (!is_valid_utf8(n.Scalar())) {
+    fail(DecodeError::invalid_value, path, "not valid UTF-8 once unescaped");
+    return std::nullopt;
+  }
   return n.Scalar();
 }
 

@@ -146,6 +146,20 @@ TEST(Messages, UnknownFieldsAreIgnoredAndUnknownErrorCodesKept) {
   EXPECT_EQ(std::get<Error>(*e).code, ErrorCode::unknown);
 }
 
+// fuzz_messages' finding: "\N" (YAML's escape for U+0085) unescaped to a bare 0x85 byte, which
+// the decoder kept and our encoder then wrote into a frame no peer could read.
+TEST(Messages, StringsThatUnescapeToInvalidUtf8AreRefused) {
+  auto r = decode_header(R"({"type": "error", "id": 3, "code": "scene_invalid", "message": "a\NULL b"})");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.code(), DecodeError::invalid_value);
+  EXPECT_NE(r.message().find("message"), std::string::npos) << r.message();
+  auto ok = decode_header(R"({"type": "error", "id": 3, "code": "scene_invalid", "message": "a\u0085 b"})");
+  ASSERT_TRUE(ok.ok()) << ok.message();
+  auto again = decode_message(through_decoder(encode(*ok)));
+  ASSERT_TRUE(again.ok());
+  EXPECT_TRUE(*again == *ok);
+}
+
 TEST(Messages, PayloadOnlyWhereAllowed) {
   auto p = parse_header(R"({"type": "ping", "id": 1})");
   ASSERT_TRUE(p.ok());
