@@ -13,20 +13,23 @@ PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings) :
     }
 }
 
-Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,
-                              Sampler& sampler, TracerStats& stats) const {
+PathTracer::DirectDraw PathTracer::draw_direct(const SurfaceHit& hit, Sampler& sampler) const {
     const auto& sel = scene_.light_selection();
-    if (sel.empty()) return Rgb(0.f);
+    if (sel.empty()) return {};
     float u_sel = sampler.next_1d_if(sel.size() > 1);  // one light: nothing to choose
     size_t li = sel.sample(u_sel);
     const Light& light = scene_.lights()[li];
     if (light_faces_away(scene_, light, hit.p)) {  // no sample of it could contribute
         sampler.skip_2d();
-        return Rgb(0.f);
+        return {};
     }
-    Vec2 u = sampler.next_2d();
-    float pmf = sel.pmf(li);
-    auto ls = light_sample_li(scene_, light, hit.p, u);
+    return {&light, sel.pmf(li), sampler.next_2d()};
+}
+
+Rgb PathTracer::eval_direct(const DirectDraw& d, const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local,
+                            const Bsdf& bsdf, TracerStats& stats) const {
+    if (!d.light) return Rgb(0.f);
+    auto ls = light_sample_li(scene_, *d.light, hit.p, d.u);
     if (!ls || ls->pdf_sa <= 0 || is_black(ls->Li)) return Rgb(0.f);
     Vec3 wi_local = shading.to_local(ls->wi);
     if (!consistent_side(ls->wi, hit.ng, wi_local.z)) return Rgb(0.f);
@@ -35,7 +38,7 @@ Rgb PathTracer::sample_direct(const SurfaceHit& hit, const Frame& shading, const
     Ray shadow = ls->infinite ? spawn_ray(hit, ls->wi) : spawn_ray_to(hit, ls->p, ls->p_error, ls->n);
     ++stats.rays;
     if (scene_.occluded(shadow)) return Rgb(0.f);
-    float pdf_light_sa = pmf * ls->pdf_sa;
+    float pdf_light_sa = d.pmf * ls->pdf_sa;
     float w = ls->delta ? 1.f : power_heuristic(pdf_light_sa, bsdf_pdf_sa(bsdf, wo_local, wi_local, TransportMode::Radiance));
     return f * ls->Li * (w / pdf_light_sa);
 }
@@ -125,28 +128,39 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
         Vec3 wo_local = shading.to_local(wo);
         if (wo_local.z == 0) break;
 
-        // Vertex k of the path (k edges before it) draws from its own block of dimensions.
+        // Vertex k of the path (k edges before it) draws from its own block of dimensions, in the
+        // order next-event estimation, connector, scatter (the independent sampler's stream).
+        // The BSDF sample is taken before the light is evaluated: the next ray depends on it and
+        // not on the shadow ray, so its dependent chain (hashes, warp, frame) runs while the
+        // light sample and the shadow ray are in flight, rather than after them.
         const bool nondelta = bsdf_has_nondelta(bsdf);
+        DirectDraw direct;
         if (nee && nondelta) {
             sampler.start_dimension(dims::camera_walk(k, dims::kDirect));
-            const Rgb c = beta * sample_direct(hit, shading, wo_local, bsdf, sampler, stats);
-            L += c;
-            if (lpe) lpe->emit_via(bsdf, c);
-            if (classes) classes->emit_via(k, c);
+            direct = draw_direct(hit, sampler);
         }
         // The connector's chain has two more edges: x -> mirror -> light.
         const bool connector = mirrors_ && nondelta && k + 2 <= max_depth;
-        if (connector) {
-            const Rgb c = beta * sample_direct_via_mirrors(hit, shading, wo_local, bsdf, k, sampler, stats);
-            L += c;
-            if (lpe) lpe->emit_via_mirror(bsdf, c);  // x, then the mirror (S), then L
-            if (classes) classes->emit_via_mirror(k, c);
-        }
+        Rgb c_connector(0.f);
+        if (connector) c_connector = beta * sample_direct_via_mirrors(hit, shading, wo_local, bsdf, k, sampler, stats);
 
         sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
         float uc = sampler.next_1d_if(bsdf_sample_uses_uc(bsdf));
         Vec2 u = sampler.next_2d();
         auto bs = bsdf_sample(bsdf, wo_local, uc, u, TransportMode::Radiance);
+
+        if (nee && nondelta) {
+            const Rgb c = beta * eval_direct(direct, hit, shading, wo_local, bsdf, stats);
+            L += c;
+            if (lpe) lpe->emit_via(bsdf, c);
+            if (classes) classes->emit_via(k, c);
+        }
+        if (connector) {
+            L += c_connector;
+            if (lpe) lpe->emit_via_mirror(bsdf, c_connector);  // x, then the mirror (S), then L
+            if (classes) classes->emit_via_mirror(k, c_connector);
+        }
+
         if (!bs || is_black(bs->weight)) break;
         Vec3 wi = shading.to_world(bs->wi);
         if (!consistent_side(wi, hit.ng, bs->wi.z)) break;

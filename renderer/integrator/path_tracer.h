@@ -47,8 +47,16 @@ public:
                  PathClassTracker* classes = nullptr) const;
 
 private:
-    Rgb sample_direct(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,
-                      Sampler& sampler, TracerStats& stats) const;
+    // Next-event estimation in two halves: the draws (a light and a point on it), then the light
+    // sample, the BSDF and the shadow ray. radiance() takes the BSDF sample between them (see there).
+    struct DirectDraw {
+        const Light* light = nullptr;  // null: no light, or one facing away (nothing to evaluate)
+        float pmf = 0;                 // its selection probability
+        Vec2 u;
+    };
+    DirectDraw draw_direct(const SurfaceHit& hit, Sampler& sampler) const;
+    Rgb eval_direct(const DirectDraw& d, const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local,
+                    const Bsdf& bsdf, TracerStats& stats) const;
     // Next-event estimation through each planar mirror from camera-walk vertex k (k edges before it).
     Rgb sample_direct_via_mirrors(const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local, const Bsdf& bsdf,
                                   int k, Sampler& sampler, TracerStats& stats) const;
