@@ -162,9 +162,8 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
                                   Sampler& sampler, TracerStats& stats, ConnectStats& cstats,
                                   std::vector<PathVertex>* full_path, FullPathPdfs* pdfs) {
     Connection c;
-    // Only s = 1 and t = 1 sample an endpoint: most connections (s, t >= 2) skip building one.
-    std::optional<PathVertex> sampled;
     VertexLocal ly, lz;  // s, t >= 2: both ends in their shading frames, for f and the densities
+    // Only s = 1 and t = 1 sample an endpoint (into cstats.sampled): most connections skip it.
     const PathVertex* sampled_light = nullptr;
     const PathVertex* sampled_sensor = nullptr;
     std::optional<Sensor::Pdf> sensor_we;  // t = 1: the sensor's pdf_we towards y, read again by the MIS weight
@@ -189,14 +188,15 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         auto sc = sensor.sample_wi(y.p(), sampler.next_2d_if(sensor.uses_lens_sample()));
         if (!sc) return std::nullopt;
         if (!set.single_strategy() || full_path || pdfs) {  // only the MIS weight and the tests read it
+            PathVertex& sampled = cstats.sampled;
             sampled = sensor_vertex(scene, sc->p);
             if (sensor.delta_direction()) {
-                sampled->pdf_fwd = 1.0;
+                sampled.pdf_fwd = 1.0;
             } else {
                 sensor_we = sensor.pdf_we(sc->p, -sc->wi);
-                sampled->pdf_fwd = sensor_we->pos;
+                sampled.pdf_fwd = sensor_we->pos;
             }
-            sampled_sensor = &*sampled;
+            sampled_sensor = &sampled;
         }
         if (y.kind == VertexKind::Light) {
             // s = 1: the light itself seen by the sensor. Emission towards the sensor over the
@@ -232,8 +232,8 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         double pmf = sel.pmf(li);
         auto ls = light_sample_li(scene, l, z.p(), sampler.next_2d());
         if (!ls || ls->pdf_sa <= 0 || is_black(ls->Li)) return std::nullopt;
-        sampled = light_sample_vertex(li, *ls);
-        sampled_light = &*sampled;
+        cstats.sampled = light_sample_vertex(li, *ls);
+        sampled_light = &cstats.sampled;
         Rgb f = vertex_f(z, ls->wi, TransportMode::Radiance) * absdot(ls->wi, z.hit.ns);
         if (is_black(f)) return std::nullopt;
         c.L = z.beta * f * ls->Li / float(pmf * ls->pdf_sa);

@@ -25,6 +25,9 @@ struct ConnectStats {
     FullPathPdfs table;        // reused: no allocation per connection once warmed up
     std::vector<PathVertex> mirror_camera;  // the planar-mirror connector's camera side with the mirror vertex
     MisPrefixes prefix;  // BDPT: the current sample's subpath sums; connect() uses them when they cover its subpaths
+    // The endpoint connect() samples for s = 1 or t = 1, valid during one call. A local
+    // std::optional<PathVertex> was zeroed whole (a `rep stos` of 184 bytes) on every call.
+    PathVertex sampled;
 };
 
 // Strategy (s, t) for the given subpaths. Tests may ask for the full path v_0..v_k (light end
