@@ -13,7 +13,7 @@ PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings) :
     }
 }
 
-PathTracer::DirectDraw PathTracer::draw_direct(const SurfaceHit& hit, Sampler& sampler) const {
+PathTracer::DirectDraw PathTracer::draw_direct(const SurfaceHit& hit, Sampler& sampler, const Vec2* ahead) const {
     const auto& sel = scene_.light_selection();
     if (sel.empty()) return {};
     float u_sel = sampler.next_1d_if(sel.size() > 1);  // one light: nothing to choose
@@ -22,6 +22,10 @@ PathTracer::DirectDraw PathTracer::draw_direct(const SurfaceHit& hit, Sampler& s
     if (light_faces_away(scene_, light, hit.p)) {  // no sample of it could contribute
         sampler.skip_2d();
         return {};
+    }
+    if (ahead) {
+        sampler.skip_2d();
+        return {&light, sel.pmf(li), *ahead};
     }
     return {&light, sel.pmf(li), sampler.next_2d()};
 }
@@ -79,6 +83,15 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
 
     // k is the number of edges of the path so far, counting the one being traced.
     for (int k = 1;; ++k) {
+        // This vertex's 2D draws, computed before the ray is traced where the sampler allows
+        // (sobol): they need nothing from the hit, and their hash chains then no longer lie on
+        // the dependent chain from the hit to the next ray.
+        const bool ahead = sampler.order_free() && k < dims::kMaxDepth;
+        Vec2 u_direct_ahead, u_scatter_ahead;
+        if (ahead) {
+            u_direct_ahead = sampler.sobol_2d_at(dims::camera_walk(k, dims::kDirect + 1));
+            u_scatter_ahead = sampler.sobol_2d_at(dims::camera_walk(k, dims::kScatter + 1));
+        }
         SurfaceHit hit;
         ++stats.rays;
         if (!scene_.intersect(ray, hit)) {
@@ -137,7 +150,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
         DirectDraw direct;
         if (nee && nondelta) {
             sampler.start_dimension(dims::camera_walk(k, dims::kDirect));
-            direct = draw_direct(hit, sampler);
+            direct = draw_direct(hit, sampler, ahead ? &u_direct_ahead : nullptr);
         }
         // The connector's chain has two more edges: x -> mirror -> light.
         const bool connector = mirrors_ && nondelta && k + 2 <= max_depth;
@@ -146,7 +159,13 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
 
         sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
         float uc = sampler.next_1d_if(bsdf_sample_uses_uc(bsdf));
-        Vec2 u = sampler.next_2d();
+        Vec2 u;
+        if (ahead) {
+            sampler.skip_2d();
+            u = u_scatter_ahead;
+        } else {
+            u = sampler.next_2d();
+        }
         auto bs = bsdf_sample(bsdf, wo_local, uc, u, TransportMode::Radiance);
 
         if (nee && nondelta) {

@@ -54,7 +54,7 @@ private:
         float pmf = 0;                 // its selection probability
         Vec2 u;
     };
-    DirectDraw draw_direct(const SurfaceHit& hit, Sampler& sampler) const;
+    DirectDraw draw_direct(const SurfaceHit& hit, Sampler& sampler, const Vec2* ahead) const;
     Rgb eval_direct(const DirectDraw& d, const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local,
                     const Bsdf& bsdf, TracerStats& stats) const;
     // Next-event estimation through each planar mirror from camera-walk vertex k (k edges before it).

@@ -109,19 +109,4 @@ std::optional<Mat4> Mat4::inverse() const {
     return r;
 }
 
-Vec3d Mat4::point(const Vec3d& p) const {
-    const Mat4& a = *this;
-    double x = a(0, 0) * p.x + a(0, 1) * p.y + a(0, 2) * p.z + a(0, 3);
-    double y = a(1, 0) * p.x + a(1, 1) * p.y + a(1, 2) * p.z + a(1, 3);
-    double z = a(2, 0) * p.x + a(2, 1) * p.y + a(2, 2) * p.z + a(2, 3);
-    double w = a(3, 0) * p.x + a(3, 1) * p.y + a(3, 2) * p.z + a(3, 3);
-    return w == 1.0 ? Vec3d{x, y, z} : Vec3d{x / w, y / w, z / w};
-}
-
-Vec3d Mat4::vector(const Vec3d& v) const {
-    const Mat4& a = *this;
-    return {a(0, 0) * v.x + a(0, 1) * v.y + a(0, 2) * v.z, a(1, 0) * v.x + a(1, 1) * v.y + a(1, 2) * v.z,
-            a(2, 0) * v.x + a(2, 1) * v.y + a(2, 2) * v.z};
-}
-
 }  // namespace omega

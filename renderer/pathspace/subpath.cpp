@@ -93,6 +93,14 @@ void record_lens_crossing(const Scene& scene, const Ray& ray, float tmax, const 
 int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const WalkLimits& lim, Sampler& sampler,
                 TracerStats& stats, std::vector<PathVertex>& path, std::vector<LensCrossing>* lens = nullptr) {
     while (int(path.size()) < lim.max_vertices) {
+        // The next vertex's scatter direction draw, computed before the ray is traced where the
+        // sampler allows (sobol): it needs nothing from the hit, and its hash chain then no
+        // longer lies on the dependent chain from the hit to the next ray.
+        const uint32_t scatter_next = mode == TransportMode::Radiance ? dims::camera_walk(int(path.size()), dims::kScatter)
+                                                                      : dims::light_walk(int(path.size()), dims::kScatter);
+        const bool ahead = sampler.order_free() && scatter_next != dims::kBeyond;
+        Vec2 u_ahead;
+        if (ahead) u_ahead = sampler.sobol_2d_at(scatter_next + 1);  // after the lobe's 1D
         SurfaceHit hit;
         ++stats.rays;
         const bool found = scene.intersect(ray, hit);
@@ -140,7 +148,13 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
         };
         sampler.start_dimension(block(dims::kScatter));
         float uc = sampler.next_1d_if(bsdf_sample_uses_uc(*cur.bsdf));
-        Vec2 u = sampler.next_2d();
+        Vec2 u;
+        if (ahead) {
+            sampler.skip_2d();
+            u = u_ahead;
+        } else {
+            u = sampler.next_2d();
+        }
         Bsdf textured;  // v.bsdf is the scene's material; textures are looked up at the hit's uv
         auto bs = bsdf_sample(resolve_bsdf(*cur.bsdf, cur.hit.uv, textured), wo_local, uc, u, mode);
         if (!bs || is_black(bs->weight)) break;

@@ -214,11 +214,20 @@ public:
             float a = r.next_1d();
             return {a, r.next_1d()};
         }
-        const uint64_t h = mix64(key_ ^ (uint64_t(dim_) * 0x9e3779b97f4a7c15ULL));
+        const Vec2 v = sobol_2d_at(dim_);
+        dim_ += 2;
+        return v;
+    }
+
+    // The sobol sampler's values depend only on the dimension, not on the order of the draws:
+    // an integrator may compute a draw ahead of the work it follows (see ahead_2d).
+    bool order_free() const { return type_ == SamplerType::Sobol; }
+    // The sobol 2D draw at dimension d (a dims:: value other than kBeyond), without moving.
+    Vec2 sobol_2d_at(uint32_t d) const {
+        const uint64_t h = mix64(key_ ^ (uint64_t(d) * 0x9e3779b97f4a7c15ULL));
         // A third seed from the same hash by one more multiply: the scrambles only need distinct,
         // well-mixed seeds, and a full mix per coordinate showed in the render time.
         const uint32_t c = uint32_t(((h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ULL) >> 32);
-        dim_ += 2;
         const uint32_t i = shuffled(uint32_t(h));
         // x = rev(LK_b(i)) in the low half, y = rev(LK_c(dim1_rev(i))) in the high one.
         const uint64_t xy = sobol::reverse_bits_halves(

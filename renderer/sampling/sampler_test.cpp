@@ -245,6 +245,25 @@ TEST(Sampler, SkippingADrawLeavesTheLaterDrawsAsTheyWere) {
             }
 }
 
+// The integrators compute a sobol vertex's 2D draws before tracing its ray (sobol_2d_at) and then
+// skip them in the stream: the values, and every later draw, must be those of the plain order.
+TEST(SobolSampler, DrawAheadIsTheDrawInOrder) {
+    EXPECT_TRUE(Sampler::make(SamplerType::Sobol, 1, 2, 3).order_free());
+    EXPECT_FALSE(Sampler::make(SamplerType::Independent, 1, 2, 3).order_free());
+    for (uint32_t dim : {dims::kFilm, dims::camera_walk(1, dims::kScatter + 1), dims::light_walk(63, dims::kScatter + 1)})
+        for (uint64_t index : {0ull, 5ull, 1ull << 33}) {
+            Sampler in_order = Sampler::make(SamplerType::Sobol, 3, 77, index), ahead = in_order;
+            const Vec2 early = ahead.sobol_2d_at(dim);
+            in_order.start_dimension(dim);
+            ahead.start_dimension(dim);
+            const Vec2 plain = in_order.next_2d();
+            ahead.skip_2d();
+            EXPECT_EQ(early.x, plain.x);
+            EXPECT_EQ(early.y, plain.y);
+            EXPECT_EQ(in_order.next_1d(), ahead.next_1d());
+        }
+}
+
 TEST(SamplerType, Names) {
     EXPECT_STREQ(sampler_name(SamplerType::Sobol), "sobol");
     EXPECT_EQ(sampler_from_name("independent"), SamplerType::Independent);
