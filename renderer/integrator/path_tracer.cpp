@@ -13,7 +13,10 @@ PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings) :
     }
 }
 
-PathTracer::DirectDraw PathTracer::draw_direct(const SurfaceHit& hit, Sampler& sampler, const Vec2* ahead) const {
+// Inlined into radiance(): returned through memory, its 24 bytes were written as three stores and
+// read back as one 16-byte load, which the store buffer cannot forward (a stall per vertex).
+[[gnu::always_inline]] inline PathTracer::DirectDraw PathTracer::draw_direct(const SurfaceHit& hit, Sampler& sampler,
+                                                                              const Vec2* ahead) const {
     const auto& sel = scene_.light_selection();
     if (sel.empty()) return {};
     float u_sel = sampler.next_1d_if(sel.size() > 1);  // one light: nothing to choose
