@@ -1,6 +1,7 @@
 #include "pathspace/subpath.h"
 
 #include <cmath>
+#include <span>
 
 #include "light/light_emission.h"
 #include "math/float_bits.h"
@@ -23,7 +24,7 @@ float shading_correction(const PathVertex& v, const Vec3& wo, const Vec3& wi) {
 
 
 // Density with which the walk's last vertex, arriving from v, generates its predecessor.
-double density_back(const Scene&, const std::vector<PathVertex>& path, const PathVertex& v) {
+double density_back(const Scene&, std::span<const PathVertex> path, const PathVertex& v) {
     const PathVertex& cur = path.back();
     const PathVertex& pred = path[path.size() - 2];
     if (cur.kind != VertexKind::Surface) return 0.0;
@@ -32,7 +33,7 @@ double density_back(const Scene&, const std::vector<PathVertex>& path, const Pat
 }
 
 // Density with which the walk's last vertex generates v (area at v; solid angle at infinity).
-double density_towards(const Scene& scene, const std::vector<PathVertex>& path, const PathVertex& v) {
+double density_towards(const Scene& scene, std::span<const PathVertex> path, const PathVertex& v) {
     const PathVertex& cur = path.back();
     if (cur.kind == VertexKind::Sensor) return sensor_density_at(scene, cur, v);
     if (cur.kind == VertexKind::Light) return emission_density_at(scene, cur, v);
@@ -42,8 +43,9 @@ double density_towards(const Scene& scene, const std::vector<PathVertex>& path, 
 
 // Both densities a new vertex v settles (forward at v, reverse at the predecessor of the walk's
 // last vertex) as density_towards and density_back give them; a non-delta surface scatters both
-// between the same two directions, which go to its shading frame once.
-void walk_densities(const Scene& scene, std::vector<PathVertex>& path, PathVertex& v) {
+// between the same two directions, which go to its shading frame once. `path` holds the vertices
+// before v (v itself may already be stored after them).
+void walk_densities(const Scene& scene, std::span<PathVertex> path, PathVertex& v) {
     const size_t n = path.size();
     const PathVertex& cur = path.back();
     if (cur.kind == VertexKind::Surface && !cur.delta) {
@@ -121,20 +123,23 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
             }
             break;
         }
-        PathVertex v;
+        // Built in place: a local vertex copied in was read back with wide loads over its narrow
+        // stores, which the store buffer cannot forward.
+        const size_t n_before = path.size();
+        PathVertex& v = path.emplace_back();
+        const std::span<PathVertex> before(path.data(), n_before);
         v.kind = VertexKind::Surface;
         v.hit = hit;
         // From the stored positions rather than the ray, so later evaluations at this vertex
         // (connections, reverse densities) agree exactly with what any split recomputes.
-        v.wo = path.back().infinite ? -path.back().dir : normalize(path.back().p() - hit.p);
+        v.wo = before.back().infinite ? -before.back().dir : normalize(before.back().p() - hit.p);
         v.bsdf = &scene.bsdf_of(hit);
         v.light = scene.shapes()[hit.shape].light;
         v.shading = Frame::from_normal(hit.ns);
         v.beta = beta;
         // Densities from the vertex positions, exactly as a connection would compute them, so
         // every split of a path sees the same numbers.
-        if (lim.densities) walk_densities(scene, path, v);
-        path.push_back(v);
+        if (lim.densities) walk_densities(scene, before, v);
         if (int(path.size()) >= lim.max_vertices) break;
         PathVertex& cur = path.back();
         if (std::holds_alternative<BlackBsdf>(*cur.bsdf)) break;
