@@ -26,11 +26,7 @@ PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings) :
         sampler.skip_2d();
         return {};
     }
-    if (ahead) {
-        sampler.skip_2d();
-        return {&light, sel.pmf(li), *ahead};
-    }
-    return {&light, sel.pmf(li), sampler.next_2d()};
+    return {&light, sel.pmf(li), sampler.next_2d(ahead)};
 }
 
 Rgb PathTracer::eval_direct(const DirectDraw& d, const SurfaceHit& hit, const Frame& shading, const Vec3& wo_local,
@@ -162,13 +158,7 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
 
         sampler.start_dimension(dims::camera_walk(k, dims::kScatter));
         float uc = sampler.next_1d_if(bsdf_sample_uses_uc(bsdf));
-        Vec2 u;
-        if (ahead) {
-            sampler.skip_2d();
-            u = u_scatter_ahead;
-        } else {
-            u = sampler.next_2d();
-        }
+        const Vec2 u = sampler.next_2d(ahead ? &u_scatter_ahead : nullptr);
         auto bs = bsdf_sample(bsdf, wo_local, uc, u, TransportMode::Radiance);
 
         if (nee && nondelta) {

@@ -153,13 +153,7 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
         };
         sampler.start_dimension(block(dims::kScatter));
         float uc = sampler.next_1d_if(bsdf_sample_uses_uc(*cur.bsdf));
-        Vec2 u;
-        if (ahead) {
-            sampler.skip_2d();
-            u = u_ahead;
-        } else {
-            u = sampler.next_2d();
-        }
+        const Vec2 u = sampler.next_2d(ahead ? &u_ahead : nullptr);
         Bsdf textured;  // v.bsdf is the scene's material; textures are looked up at the hit's uv
         auto bs = bsdf_sample(resolve_bsdf(*cur.bsdf, cur.hit.uv, textured), wo_local, uc, u, mode);
         if (!bs || is_black(bs->weight)) break;

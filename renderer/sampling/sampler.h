@@ -220,8 +220,16 @@ public:
     }
 
     // The sobol sampler's values depend only on the dimension, not on the order of the draws:
-    // an integrator may compute a draw ahead of the work it follows (see ahead_2d).
+    // an integrator may compute a draw ahead of the work it follows (sobol_2d_at) and take it
+    // in its turn with next_2d(&value).
     bool order_free() const { return type_ == SamplerType::Sobol; }
+    // next_2d(), where `ahead` (if not null) already holds this draw from sobol_2d_at: the stream
+    // moves past it as next_2d() would.
+    Vec2 next_2d(const Vec2* ahead) {
+        if (!ahead) return next_2d();
+        skip_2d();
+        return *ahead;
+    }
     // The sobol 2D draw at dimension d (a dims:: value other than kBeyond), without moving.
     Vec2 sobol_2d_at(uint32_t d) const {
         const uint64_t h = mix64(key_ ^ (uint64_t(d) * 0x9e3779b97f4a7c15ULL));

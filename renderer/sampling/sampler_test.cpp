@@ -256,10 +256,10 @@ TEST(SobolSampler, DrawAheadIsTheDrawInOrder) {
             const Vec2 early = ahead.sobol_2d_at(dim);
             in_order.start_dimension(dim);
             ahead.start_dimension(dim);
-            const Vec2 plain = in_order.next_2d();
-            ahead.skip_2d();
+            const Vec2 plain = in_order.next_2d(), taken = ahead.next_2d(&early);
             EXPECT_EQ(early.x, plain.x);
             EXPECT_EQ(early.y, plain.y);
+            EXPECT_EQ(taken.x, plain.x);
             EXPECT_EQ(in_order.next_1d(), ahead.next_1d());
         }
 }
