@@ -80,17 +80,22 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
     Vec3 origin_p;
     float origin_pdf_sa = 0;
 
+    bool direct_pays = true;   // the last vertex used its light sample's 2D draw (see below)
+
     // k is the number of edges of the path so far, counting the one being traced.
     for (int k = 1;; ++k) {
         // This vertex's 2D draws, computed before the ray is traced where the sampler allows
         // (sobol): they need nothing from the hit, and their hash chains then no longer lie on
         // the dependent chain from the hit to the next ray.
-        const bool ahead = sampler.order_free() && k < dims::kMaxDepth;
+        // Not for a vertex that ends the path (k = max_depth) and, for the light sample, not where
+        // the last vertex culled its own (light_faces_away): in a room lit from one side that is
+        // most vertices, and a draw computed for nothing is a hash chain's worth of work wasted.
+        // Either way the value is the same, so the image is too.
+        const bool ahead = sampler.order_free() && k < max_depth && k < dims::kMaxDepth;
+        const bool direct_ahead = ahead && nee && direct_pays;
         Vec2 u_direct_ahead, u_scatter_ahead;
-        if (ahead) {
-            u_direct_ahead = sampler.sobol_2d_at(dims::camera_walk(k, dims::kDirect + 1));
-            u_scatter_ahead = sampler.sobol_2d_at(dims::camera_walk(k, dims::kScatter + 1));
-        }
+        if (direct_ahead) u_direct_ahead = sampler.sobol_2d_at(dims::camera_walk(k, dims::kDirect + 1));
+        if (ahead) u_scatter_ahead = sampler.sobol_2d_at(dims::camera_walk(k, dims::kScatter + 1));
         SurfaceHit hit;
         ++stats.rays;
         if (!scene_.intersect(ray, hit)) {
@@ -149,7 +154,8 @@ Rgb PathTracer::radiance(Ray ray, Sampler& sampler, TracerStats& stats, CameraLp
         DirectDraw direct;
         if (nee && nondelta) {
             sampler.start_dimension(dims::camera_walk(k, dims::kDirect));
-            direct = draw_direct(hit, sampler, ahead ? &u_direct_ahead : nullptr);
+            direct = draw_direct(hit, sampler, direct_ahead ? &u_direct_ahead : nullptr);
+            direct_pays = direct.light != nullptr;
         }
         // The connector's chain has two more edges: x -> mirror -> light.
         const bool connector = mirrors_ && nondelta && k + 2 <= max_depth;

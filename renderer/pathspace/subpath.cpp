@@ -100,7 +100,8 @@ int random_walk(const Scene& scene, Ray ray, Rgb beta, TransportMode mode, const
         // longer lies on the dependent chain from the hit to the next ray.
         const uint32_t scatter_next = mode == TransportMode::Radiance ? dims::camera_walk(int(path.size()), dims::kScatter)
                                                                       : dims::light_walk(int(path.size()), dims::kScatter);
-        const bool ahead = sampler.order_free() && scatter_next != dims::kBeyond;
+        // Not for the walk's last vertex, which does not scatter.
+        const bool ahead = sampler.order_free() && scatter_next != dims::kBeyond && int(path.size()) + 1 < lim.max_vertices;
         Vec2 u_ahead;
         if (ahead) u_ahead = sampler.sobol_2d_at(scatter_next + 1);  // after the lobe's 1D
         SurfaceHit hit;

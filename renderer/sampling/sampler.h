@@ -124,6 +124,26 @@ constexpr uint32_t dim1_reversed(uint32_t i) {
     const auto& t = kDim1Reversed.t;
     return t[0][i & 0xff] ^ t[1][(i >> 8) & 0xff] ^ t[2][(i >> 16) & 0xff] ^ t[3][i >> 24];
 }
+// The shuffle's output comes bit-reversed (z = LK(rev(i)), i' = rev(z)), and a 2D draw needs both
+// i' (for x) and dim1_reversed(i') (for y). Both are linear over GF(2) in z, so one table of
+// pairs, a byte of z at a time, gives both: {rev(z), dim1_reversed(rev(z))} in the low and high
+// halves (8 KiB). It replaces a 32-bit reversal and the 4 lookups above by 4 lookups.
+struct UnshuffleTable {
+    uint64_t t[4][256];
+    constexpr UnshuffleTable() : t{} {
+        for (uint32_t k = 0; k < 4; ++k)
+            for (uint32_t b = 0; b < 256; ++b) {
+                const uint32_t i = reverse_bits(b << (8 * k));
+                t[k][b] = uint64_t(i) | uint64_t(reverse_bits(dim1_by_bits(i))) << 32;
+            }
+    }
+};
+inline constexpr UnshuffleTable kUnshuffle{};
+// {rev(z), dim1_reversed(rev(z))} in the low and high halves.
+constexpr uint64_t unshuffle(uint32_t z) {
+    const auto& t = kUnshuffle.t;
+    return t[0][z & 0xff] ^ t[1][(z >> 8) & 0xff] ^ t[2][(z >> 16) & 0xff] ^ t[3][z >> 24];
+}
 constexpr uint32_t dim1(uint32_t i) { return reverse_bits(dim1_reversed(i)); }
 
 // reverse_bits of both 32-bit halves at once, each in place: one byte swap and three mask steps
@@ -236,17 +256,18 @@ public:
         // A third seed from the same hash by one more multiply: the scrambles only need distinct,
         // well-mixed seeds, and a full mix per coordinate showed in the render time.
         const uint32_t c = uint32_t(((h ^ (h >> 29)) * 0xbf58476d1ce4e5b9ULL) >> 32);
-        const uint32_t i = shuffled(uint32_t(h));
+        // i = the shuffled index and dim1_rev(i), from the shuffle's reversed output at once.
+        const uint64_t i = sobol::unshuffle(sobol::laine_karras(index_reversed_, uint32_t(h)));
         // x = rev(LK_b(i)) in the low half, y = rev(LK_c(dim1_rev(i))) in the high one.
         const uint64_t xy = sobol::reverse_bits_halves(
-            uint64_t(sobol::laine_karras(i, uint32_t(h >> 32))) |
-            uint64_t(sobol::laine_karras(sobol::dim1_reversed(i), c)) << 32);
+            uint64_t(sobol::laine_karras(uint32_t(i), uint32_t(h >> 32))) |
+            uint64_t(sobol::laine_karras(uint32_t(i >> 32), c)) << 32);
         return {sobol::to_unit(uint32_t(xy)), sobol::to_unit(uint32_t(xy >> 32))};
     }
 
 private:
     uint32_t shuffled(uint32_t seed) const {
-        return sobol::reverse_bits(sobol::laine_karras(index_reversed_, seed));  // = owen(index, seed)
+        return uint32_t(sobol::unshuffle(sobol::laine_karras(index_reversed_, seed)));  // = owen(index, seed)
     }
 
     Sampler() = default;

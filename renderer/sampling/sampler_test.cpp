@@ -132,6 +132,12 @@ TEST(SobolSampler, FastPathEqualsThePlainFormulas) {
     // next_1d/next_2d cancel bit reversals and use a table for dimension 1; the plain
     // composition i' = owen(i), x = owen(dim0(i')), y = owen(dim1(i')) must give the same bits.
     for (uint32_t i = 0; i < 4096; i += 7) EXPECT_EQ(sobol::dim1(i * 2654435761u), sobol::dim1_by_bits(i * 2654435761u));
+    for (uint32_t z = 0; z < 1u << 20; z += 97) {
+        const uint32_t w = z * 2654435761u;
+        const uint64_t u = sobol::unshuffle(w);
+        EXPECT_EQ(uint32_t(u), sobol::reverse_bits(w)) << w;
+        EXPECT_EQ(uint32_t(u >> 32), sobol::dim1_reversed(sobol::reverse_bits(w))) << w;
+    }
     for (uint64_t x : {0ull, 1ull, 0x8000000000000001ull, 0x0123456789abcdefull, ~0ull, 0xdeadbeef00c0ffeeull}) {
         const uint64_t r = sobol::reverse_bits_halves(x);
         EXPECT_EQ(uint32_t(r), sobol::reverse_bits(uint32_t(x))) << x;
