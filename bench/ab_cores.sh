@@ -26,20 +26,21 @@ command -v taskset >/dev/null || { echo "ab_cores: needs taskset (util-linux)" >
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 
-# samples/s from the summary line omega render prints ("... in 1.2 s, 1.48M samples/s, ...").
+# samples/s of a whole render.
+# Read from the --report CSV's last pass (6 digits): the summary line rounds to 3, which made
+# every ratio a multiple of about 1%.
 rate() {
-  grep -o '[0-9.]*[kMG]\{0,1\} samples/s' "$1" | tail -1 |
-    awk '{v = $1; m = 1; if (v ~ /k$/) m = 1e3; if (v ~ /M$/) m = 1e6; if (v ~ /G$/) m = 1e9; sub(/[kMG]$/, "", v); print v * m}'
+  tail -1 "$1" | awk -F, '{ print $4 }'
 }
 # One placement: OLD on core $1, NEW on core $2, at the same time.
 pair() {
-  taskset -c "$1" "$OLD" render "$SCENE" --spp "$SPP" --threads 1 --integrator "$INTEGRATOR" -o "$WORK/old.exr" > "$WORK/old.txt" 2>&1 &
+  taskset -c "$1" "$OLD" render "$SCENE" --spp "$SPP" --threads 1 --integrator "$INTEGRATOR" -o "$WORK/old.exr" --report "$WORK/old.csv" > "$WORK/old.txt" 2>&1 &
   local a=$!
-  taskset -c "$2" "$NEW" render "$SCENE" --spp "$SPP" --threads 1 --integrator "$INTEGRATOR" -o "$WORK/new.exr" > "$WORK/new.txt" 2>&1 &
+  taskset -c "$2" "$NEW" render "$SCENE" --spp "$SPP" --threads 1 --integrator "$INTEGRATOR" -o "$WORK/new.exr" --report "$WORK/new.csv" > "$WORK/new.txt" 2>&1 &
   local b=$!
   wait $a || { echo "ab_cores: OLD failed:"; cat "$WORK/old.txt"; exit 1; } >&2
   wait $b || { echo "ab_cores: NEW failed:"; cat "$WORK/new.txt"; exit 1; } >&2
-  echo "$(rate "$WORK/old.txt") $(rate "$WORK/new.txt")"
+  echo "$(rate "$WORK/old.csv") $(rate "$WORK/new.csv")"
 }
 
 echo "scene $SCENE  integrator $INTEGRATOR  $SPP spp  1 thread each, cores swapped"

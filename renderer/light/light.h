@@ -46,15 +46,18 @@ struct EnvMapLight {
 using Light = std::variant<AreaLight, PointLight, SpotLight, DirectionalLight, ConstantLight, EnvMapLight>;
 
 // A light sample seen from a reference point, for next-event estimation.
+// Each three-float field starts a 16-byte slot: the samplers fill the struct with 16-byte
+// stores, and packed fields straddled them, so a caller's 8-byte load of wi.x, wi.y (and of
+// p_error's) missed store forwarding.
 struct LightSample {
-    Rgb Li;            // radiance (or intensity / r^2 for point lights) arriving along -wi
-    Vec3 wi;           // unit, from the reference point towards the light
-    Vec3 p;            // point on the light (unused when infinite)
-    Vec3 p_error;      // its error bound
-    Vec3 n;            // its normal (zero for point-like lights)
-    float pdf_sa = 0;  // solid angle at the reference point (1 for delta lights)
+    alignas(16) Vec3 wi;  // unit, from the reference point towards the light
+    float pdf_sa = 0;     // solid angle at the reference point (1 for delta lights)
+    alignas(16) Vec3 p;   // point on the light (unused when infinite)
     bool delta = false;
     bool infinite = false;
+    alignas(16) Rgb Li;   // radiance (or intensity / r^2 for point lights) arriving along -wi
+    alignas(16) Vec3 p_error;  // error bound of p
+    alignas(16) Vec3 n;        // its normal (zero for point-like lights)
 };
 
 std::optional<LightSample> light_sample_li(const Scene& scene, const Light& light, const Vec3& ref_p, Vec2 u);
