@@ -120,7 +120,11 @@ std::optional<Sensor::Connection> Sensor::sample_wi(const Vec3& ref, Vec2 u_lens
     // The film position is where the ray from the lens point crosses the focus plane, projected
     // through the pinhole (for a pinhole, focus = 1 and the lens point is the origin).
     float t = focus / dl.z;
-    Vec2 q{(lens_local.x + dl.x * t) / focus, (lens_local.y + dl.y * t) / focus};
+    // A pinhole's lens point is 0 and its focus 1: adding the one and dividing by the other change
+    // no bit, and the two divisions lay on the chain that decides near_crop's branch (light
+    // tracing's most mispredicted: most light vertices fall outside the view).
+    Vec2 q = pinhole ? Vec2{dl.x * t, dl.y * t}
+                     : Vec2{(lens_local.x + dl.x * t) / focus, (lens_local.y + dl.y * t) / focus};
     c.film = film_plane::to_film(q.x, q.y, ex, ey, width, height);
     if (!film_plane::near_crop(crop, c.film, filter_radius)) return std::nullopt;
     c.p = pinhole ? local_origin : local_point(lens_local);  // the same bits: lens_local is 0
