@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "math/float_bits.h"
+
 namespace omega {
 
 float default_filter_radius(FilterType type) {
@@ -88,10 +90,14 @@ double Filter::sample_1d(double u) const {
     double x = 0;
     switch (type_) {
         case FilterType::Box: x = (2.0 * u - 1.0) * r; break;
-        case FilterType::Tent:
-            // Inverse CDF of each half, in double so it matches pdf_1d to rounding.
-            x = u < 0.5 ? r * (-1.0 + std::sqrt(2.0 * u)) : r * (1.0 - std::sqrt(2.0 - 2.0 * u));
+        case FilterType::Tent: {
+            // Inverse CDF of each half, in double so it matches pdf_1d to rounding. The half is
+            // a coin flip per sample: selects, not a branch.
+            const bool left = u < 0.5;
+            const double root = std::sqrt(select_bits(left, 2.0 * u, 2.0 - 2.0 * u));
+            x = r * select_bits(left, -1.0 + root, 1.0 - root);
             break;
+        }
         case FilterType::Gaussian:
             // Exact inverse CDF of the truncated Gaussian: one uniform per axis, weight 1, no
             // rejection, so no extra random numbers are needed.

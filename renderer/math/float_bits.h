@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "math/simd4.h"
 
@@ -11,6 +12,17 @@ namespace omega {
 
 constexpr float kMachineEps = std::numeric_limits<float>::epsilon() * 0.5f;
 constexpr float gamma_bound(int n) { return (float(n) * kMachineEps) / (1.f - float(n) * kMachineEps); }
+
+// c ? a : b through a bit mask. GCC turns a ternary on floating-point values back into a
+// branch, which mispredicts half the time where c is a coin flip per sample (the concentric
+// map's octant, the tent filter's half).
+template <class F>
+inline F select_bits(bool c, F a, F b) {
+    using U = std::conditional_t<sizeof(F) == 4, uint32_t, uint64_t>;
+    static_assert(sizeof(F) == sizeof(U));
+    const U m = U(0) - U(c);
+    return std::bit_cast<F>((std::bit_cast<U>(a) & m) | (std::bit_cast<U>(b) & ~m));
+}
 
 inline float next_float_up(float v) {
     if (std::isinf(v) && v > 0.f) return v;

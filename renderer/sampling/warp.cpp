@@ -1,9 +1,9 @@
 #include "sampling/warp.h"
 
 #include <algorithm>
-#include <bit>
-#include <cstdint>
 #include <cmath>
+
+#include "math/float_bits.h"
 
 namespace omega {
 
@@ -24,11 +24,8 @@ Vec2 sincos_quarter_pi(float x) {
 Vec2 square_to_uniform_disk_concentric(Vec2 u) {
     float ox = 2.f * u.x - 1.f, oy = 2.f * u.y - 1.f;
     if (ox == 0 && oy == 0) return {0, 0};
-    // GCC turns a ternary on floats back into a branch; a mask of bits stays a select.
-    const uint32_t x_major = 0u - uint32_t(std::abs(ox) > std::abs(oy));
-    const auto pick = [x_major](float a, float b) {
-        return std::bit_cast<float>((std::bit_cast<uint32_t>(a) & x_major) | (std::bit_cast<uint32_t>(b) & ~x_major));
-    };
+    const bool x_major = std::abs(ox) > std::abs(oy);
+    const auto pick = [x_major](float a, float b) { return select_bits(x_major, a, b); };
     const float r = pick(ox, oy);
     const Vec2 cs = sincos_quarter_pi((kPi / 4.f) * (pick(oy, ox) / r));
     return {r * pick(cs.x, cs.y), r * pick(cs.y, cs.x)};
