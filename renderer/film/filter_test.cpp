@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
+#include <vector>
 
 #include "film/film.h"
 #include "film/film_chi2_test_util.h"
@@ -226,6 +230,25 @@ TEST(Chi2Util, GammaQMatchesKnownValues) {
     EXPECT_NEAR(film_test::gamma_q(1.0, 2.0), std::exp(-2.0), 1e-12);
     // Temme's expansion Q(a, a) = 1/2 - 1/(3 sqrt(2 pi a)) + O(a^-3/2); the next term is ~6e-6.
     EXPECT_NEAR(film_test::gamma_q(200.0, 200.0), 0.5 - 1 / (3 * std::sqrt(2 * M_PI * 200)), 2e-5);
+}
+
+// The tent's inverse CDF picks its half by selects (no branch): the branching form it replaced,
+// bit for bit, so images did not move.
+TEST(Filter, TentSampleEqualsTheBranchingInverseCdf) {
+    const Filter f(FilterType::Tent, 1.5f);
+    auto branching = [](double u) {
+        const double r = 1.5f;
+        const double x = u < 0.5 ? r * (-1.0 + std::sqrt(2.0 * u)) : r * (1.0 - std::sqrt(2.0 - 2.0 * u));
+        return float(std::clamp(x, -r, r));
+    };
+    Rng rng(5, 0);
+    std::vector<Vec2> us = {{0.f, 0.5f}, {std::nextafter(0.5f, 0.f), 1.f - 0x1p-24f}, {0.25f, 0.75f}};
+    for (int i = 0; i < 200000; ++i) us.push_back({rng.next_1d(), rng.next_1d()});
+    for (Vec2 u : us) {
+        const Vec2 x = f.sample(u);
+        EXPECT_EQ(std::bit_cast<uint32_t>(x.x), std::bit_cast<uint32_t>(branching(u.x))) << u.x;
+        EXPECT_EQ(std::bit_cast<uint32_t>(x.y), std::bit_cast<uint32_t>(branching(u.y))) << u.y;
+    }
 }
 
 }  // namespace

@@ -56,5 +56,21 @@ TEST(FloatBits, NextFloatToward4EqualsTheScalarFormOnEveryLane) {
     EXPECT_GT(checked, 800000);
 }
 
+// select_bits is the ternary, bit for bit: signed zeros, infinities and NaN payloads pass through.
+TEST(FloatBits, SelectBitsIsTheTernaryBitForBit) {
+    const float fv[] = {0.f, -0.f, 1.5f, -2.f, std::numeric_limits<float>::infinity(),
+                        std::bit_cast<float>(0x7fc01234u), std::bit_cast<float>(0xffa00001u),
+                        std::numeric_limits<float>::denorm_min()};
+    for (float a : fv)
+        for (float b : fv)
+            for (bool c : {false, true}) EXPECT_EQ(bits(select_bits(c, a, b)), bits(c ? a : b));
+    const double dv[] = {0.0, -0.0, 1e300, -3.25, std::bit_cast<double>(0x7ff8000000abcdefull),
+                         std::numeric_limits<double>::denorm_min()};
+    for (double a : dv)
+        for (double b : dv)
+            for (bool c : {false, true})
+                EXPECT_EQ(std::bit_cast<uint64_t>(select_bits(c, a, b)), std::bit_cast<uint64_t>(c ? a : b));
+}
+
 }  // namespace
 }  // namespace omega

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cstdint>
+#include <vector>
+
 #include "chi2.h"
 
 namespace omega {
@@ -105,6 +109,29 @@ TEST(Warp, SincosQuarterPiMatchesLibm) {
     EXPECT_LT(worst_s, 1.2e-7);
     EXPECT_EQ(sincos_quarter_pi(0.f).x, 1.f);
     EXPECT_EQ(sincos_quarter_pi(0.f).y, 0.f);
+}
+
+// The concentric map picks its octant by selects (no branch): the branching form it replaced,
+// bit for bit, so images did not move.
+TEST(Warp, ConcentricDiskEqualsTheBranchingForm) {
+    auto branching = [](Vec2 u) -> Vec2 {
+        float ox = 2.f * u.x - 1.f, oy = 2.f * u.y - 1.f;
+        if (ox == 0 && oy == 0) return {0, 0};
+        if (std::abs(ox) > std::abs(oy)) {
+            const Vec2 cs = sincos_quarter_pi((kPi / 4.f) * (oy / ox));
+            return {ox * cs.x, ox * cs.y};
+        }
+        const Vec2 cs = sincos_quarter_pi((kPi / 4.f) * (ox / oy));
+        return {oy * cs.y, oy * cs.x};
+    };
+    Rng rng(11, 0);
+    std::vector<Vec2> us = {{0.5f, 0.5f}, {0.f, 0.f}, {0.25f, 0.25f}, {0.75f, 0.25f}, {0.5f, 0.f}, {1.f - 0x1p-24f, 0.5f}};
+    for (int i = 0; i < 200000; ++i) us.push_back(next_2d(rng));
+    for (Vec2 u : us) {
+        const Vec2 a = square_to_uniform_disk_concentric(u), b = branching(u);
+        EXPECT_EQ(std::bit_cast<uint32_t>(a.x), std::bit_cast<uint32_t>(b.x)) << u.x << " " << u.y;
+        EXPECT_EQ(std::bit_cast<uint32_t>(a.y), std::bit_cast<uint32_t>(b.y)) << u.x << " " << u.y;
+    }
 }
 
 TEST(Warp, CosineHemisphere) {
