@@ -2,7 +2,8 @@
 // 256x256 with max_depth 9 and prints samples/s and rays/s for 1, 2, 4, ... N threads (N: every
 // hardware thread), with the speedup over 1 thread next to Embree's own, and each rate against
 // Embree's raw rate for incoherent rays on the same BVH at the same thread count, all in the same
-// run, and the rate of a bare one-ray-at-a-time loop on the same BVH (the ceiling of that design).
+// run, and the rate of a bare one-ray-at-a-time loop on the same BVH (the ceiling of that design),
+// with what batching 8 paths' rays into Embree packets would gain on that loop and on raw rays.
 // Every figure is the median of REPEATS (default 3) measurements, each renderer run alternating
 // with an Embree run; a ratio is the median of those pairs' ratios, with their range beside it,
 // so one disturbed run on a shared machine neither moves the figure nor goes unseen.
@@ -17,6 +18,7 @@
 #include <cstdio>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "integrator/render_session.h"
@@ -54,8 +56,9 @@ RTCRay embree_ray(const Vec3& o, const Vec3& d, float tfar) {
 }
 
 // Incoherent closest-hit queries: origins uniform in the scene box, directions uniform on the
-// sphere, one rtcIntersect1 each (the same query the renderer issues).
-double embree_raw_rate(const Scene& scene, int threads, long long rays) {
+// sphere, one rtcIntersect1 each (the same query the renderer issues); with `packets`, the same
+// rays eight at a time through rtcIntersect8 (what Scene::intersect_packet issues).
+double embree_raw_rate(const Scene& scene, int threads, long long rays, bool packets = false) {
     RTCScene rtc = scene.embree_scene();
     const SceneBounds& b = scene.bounds();
     Vec3 lo = b.lo + (b.hi - b.lo) * 0.05f, ext = (b.hi - b.lo) * 0.9f;
@@ -67,10 +70,29 @@ double embree_raw_rate(const Scene& scene, int threads, long long rays) {
             uint64_t local_hits = 0;
             RTCIntersectContext ctx;
             rtcInitIntersectContext(&ctx);
-            for (long long i = r.begin(); i != r.end(); ++i) {
+            const auto ray_at = [&](long long i) {
                 Rng rng = Rng::for_sample(7, 0, uint64_t(i));
                 Vec3 o = lo + ext * Vec3(rng.next_1d(), rng.next_1d(), rng.next_1d());
-                Vec3 d = square_to_uniform_sphere({rng.next_1d(), rng.next_1d()});
+                return std::pair{o, square_to_uniform_sphere({rng.next_1d(), rng.next_1d()})};
+            };
+            for (long long i = r.begin(); packets && i < r.end(); i += 8) {
+                alignas(32) int valid[8];
+                alignas(32) RTCRayHit8 rh;
+                for (int k = 0; k < 8; ++k) {
+                    valid[k] = i + k < r.end() ? -1 : 0;
+                    if (!valid[k]) continue;
+                    const auto [o, d] = ray_at(i + k);
+                    rh.ray.org_x[k] = o.x; rh.ray.org_y[k] = o.y; rh.ray.org_z[k] = o.z;
+                    rh.ray.dir_x[k] = d.x; rh.ray.dir_y[k] = d.y; rh.ray.dir_z[k] = d.z;
+                    rh.ray.tnear[k] = 0; rh.ray.tfar[k] = kInfinity; rh.ray.mask[k] = ~0u;
+                    rh.ray.flags[k] = 0; rh.ray.time[k] = 0; rh.ray.id[k] = unsigned(k);
+                    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+                }
+                rtcIntersect8(valid, rtc, &ctx, &rh);
+                for (int k = 0; k < 8; ++k) local_hits += valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+            }
+            for (long long i = r.begin(); !packets && i != r.end(); ++i) {
+                const auto [o, d] = ray_at(i);
                 RTCRayHit rh;
                 rh.ray = embree_ray(o, d, kInfinity);
                 rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -129,6 +151,106 @@ double bare_loop_rate(const Scene& scene, int threads, int spp) {
                         }
                     }
                 }
+            rays += local;
+        });
+    });
+    double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return double(rays.load()) / secs;
+}
+
+// The bare loop with 8 paths in flight per thread: each round traces every live path's next
+// ray in one rtcIntersect8 and their shadow rays in one rtcOccluded8, and a path that ends hands
+// its lane to the next (pixel, sample). Rays of the same kind as bare_loop_rate's (camera rays,
+// cosine bounces, shadow rays to the box's centre), so the ratio of the two is what batching
+// could gain where ray queries were all the work.
+double bare_packet_loop_rate(const Scene& scene, int threads, int spp) {
+    RTCScene rtc = scene.embree_scene();
+    const Sensor& sensor = scene.sensor();
+    const int w = sensor.width, h = sensor.height;
+    const SceneBounds& b = scene.bounds();
+    const Vec3 target = (b.lo + b.hi) * 0.5f;
+    const float eps = 1e-4f * max_component(b.hi - b.lo);
+    tbb::task_arena arena(threads);
+    std::atomic<uint64_t> rays{0};
+    auto t0 = std::chrono::steady_clock::now();
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& r) {
+            uint64_t local = 0;
+            RTCIntersectContext ctx;
+            rtcInitIntersectContext(&ctx);
+            struct Lane {
+                bool live = false;
+                int depth = 0;
+                Ray ray;
+                Rng rng{0, 0};
+            } lanes[8];
+            // The next (pixel, sample) in the bare loop's order, each sample with its own stream
+            // (the samples of a pixel are in flight together).
+            long long next = (long long)r.begin() * w * spp;
+            const long long end = (long long)r.end() * w * spp;
+            const auto refill = [&](Lane& l) {
+                if (next >= end) return;
+                const long long pixel = next / spp;
+                const int x = int(pixel % w), y = int(pixel / w);
+                l.rng = Rng::for_sample(3, uint64_t(pixel), uint64_t(next % spp));
+                l.ray = sensor.generate_ray({x + l.rng.next_1d(), y + l.rng.next_1d()}, {0.f, 0.f});
+                l.depth = 0;
+                l.live = true;
+                ++next;
+            };
+            for (Lane& l : lanes) refill(l);
+            for (;;) {
+                alignas(32) int valid[8];
+                alignas(32) RTCRayHit8 rh;
+                bool any = false;
+                for (int k = 0; k < 8; ++k) {
+                    valid[k] = lanes[k].live ? -1 : 0;
+                    any |= lanes[k].live;
+                    if (!lanes[k].live) continue;
+                    const Ray& ray = lanes[k].ray;
+                    rh.ray.org_x[k] = ray.o.x; rh.ray.org_y[k] = ray.o.y; rh.ray.org_z[k] = ray.o.z;
+                    rh.ray.dir_x[k] = ray.d.x; rh.ray.dir_y[k] = ray.d.y; rh.ray.dir_z[k] = ray.d.z;
+                    rh.ray.tnear[k] = 0; rh.ray.tfar[k] = kInfinity; rh.ray.mask[k] = ~0u;
+                    rh.ray.flags[k] = 0; rh.ray.time[k] = 0; rh.ray.id[k] = unsigned(k);
+                    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+                }
+                if (!any) break;
+                rtcIntersect8(valid, rtc, &ctx, &rh);
+                alignas(32) int svalid[8];
+                alignas(32) RTCRay8 sr;
+                Vec3 p[8], n[8];
+                for (int k = 0; k < 8; ++k) {
+                    svalid[k] = 0;
+                    if (!valid[k]) continue;
+                    ++local;
+                    if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+                        lanes[k].live = false;
+                        continue;
+                    }
+                    const Ray& ray = lanes[k].ray;
+                    n[k] = normalize(Vec3(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]));
+                    if (dot(n[k], ray.d) > 0) n[k] = -n[k];
+                    p[k] = ray.o + ray.d * rh.ray.tfar[k] + n[k] * eps;
+                    const Vec3 d = target - p[k];
+                    svalid[k] = -1;
+                    sr.org_x[k] = p[k].x; sr.org_y[k] = p[k].y; sr.org_z[k] = p[k].z;
+                    sr.dir_x[k] = d.x; sr.dir_y[k] = d.y; sr.dir_z[k] = d.z;
+                    sr.tnear[k] = 0; sr.tfar[k] = 1.f; sr.mask[k] = ~0u; sr.flags[k] = 0; sr.time[k] = 0;
+                    sr.id[k] = unsigned(k);
+                }
+                rtcOccluded8(svalid, rtc, &ctx, &sr);
+                for (int k = 0; k < 8; ++k) {
+                    Lane& l = lanes[k];
+                    if (svalid[k]) {
+                        ++local;
+                        const Vec3 dl = square_to_cosine_hemisphere({l.rng.next_1d(), l.rng.next_1d()});
+                        l.ray.o = p[k];
+                        l.ray.d = Frame::from_normal(n[k]).to_world(dl);
+                        if (++l.depth == 9) l.live = false;
+                    }
+                    if (!l.live) refill(l);
+                }
+            }
             rays += local;
         });
     });
@@ -203,9 +325,29 @@ int main(int argc, char** argv) {
     std::vector<double> bares;
     for (int k = 0; k < repeats; ++k) bares.push_back(bare_loop_rate(*scene, max_threads, int(std::max(1LL, spp / 4))));
     const double bare = spread(bares).median;
+    std::vector<double> batched;
+    for (int k = 0; k < repeats; ++k)
+        batched.push_back(bare_packet_loop_rate(*scene, max_threads, int(std::max(1LL, spp / 4))) /
+                          bare_loop_rate(*scene, max_threads, int(std::max(1LL, spp / 4))));
+    const Spread batch = spread(batched);
     fmt::print("bare one-ray loop (Embree, a cosine bounce and a shadow ray per hit, nothing else): {:.3f} Mrays/s, "
                "{:.3f} of Embree's raw rate: the ceiling for a tracer that issues one ray at a time\n",
                bare / 1e6, bare / e_max);
+    fmt::print("bare loop with 8 paths in flight per thread (rtcIntersect8, rtcOccluded8): {:.3f} ({:.3f}-{:.3f}) x the "
+               "one-ray loop's rate: the ceiling of batching\n", batch.median, batch.lo, batch.hi);
+
+    // The headroom of batching: Embree's rate on the same incoherent rays in packets of 8, each
+    // run alternating with the single-ray one.
+    std::vector<double> packet_ratios;
+    const long long packet_rays = (long long)std::max(2e6 * max_threads, e_max);  // about a second
+    for (int k = 0; k < repeats; ++k) {
+        const double single = embree_raw_rate(*scene, max_threads, packet_rays);
+        packet_ratios.push_back(embree_raw_rate(*scene, max_threads, packet_rays, true) / single);
+    }
+    const Spread packet = spread(packet_ratios);
+    fmt::print("Embree in packets of 8 (rtcIntersect8, the same rays): {:.3f} ({:.3f}-{:.3f}) x its single-ray rate: "
+               "what a tracer that batched 8 paths' rays (Scene::intersect_packet) would gain on its ray queries\n",
+               packet.median, packet.lo, packet.hi);
 
     // The splatting integrators on the same scene and BVH, all threads, in the same run: their
     // rays/s against Embree's raw rate shows how much of their time is bookkeeping (densities,

@@ -3,6 +3,7 @@
 #include "scene/scene.h"
 
 #include <cmath>
+#include <stdexcept>
 
 #include "math/float_bits.h"
 #include "scene/sphere_geometry.h"
@@ -11,25 +12,42 @@ namespace omega {
 
 namespace {
 
+// The origin primitive of each ray of a query, found by the ray's id (its lane in a packet, 0
+// for a single ray): one context serves a whole packet.
 struct QueryContext {
     RTCIntersectContext ctx;  // must be first: Embree hands back a pointer to it
-    uint32_t geom, prim;
+    uint32_t geom[Scene::kPacket], prim[Scene::kPacket];
 };
 
 void reject_self_hit(const RTCFilterFunctionNArguments* args) {
     const auto* qc = reinterpret_cast<const QueryContext*>(args->context);
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] == 0) continue;
-        if (RTCHitN_geomID(args->hit, args->N, i) == qc->geom && RTCHitN_primID(args->hit, args->N, i) == qc->prim)
+        const unsigned lane = RTCRayN_id(args->ray, args->N, i);
+        if (RTCHitN_geomID(args->hit, args->N, i) == qc->geom[lane] &&
+            RTCHitN_primID(args->hit, args->N, i) == qc->prim[lane])
             args->valid[i] = 0;
     }
 }
 
 void init_context(QueryContext& qc, const Ray& ray, bool filter_self) {
     rtcInitIntersectContext(&qc.ctx);
-    qc.geom = ray.origin_geom;
-    qc.prim = ray.origin_prim;
+    qc.geom[0] = ray.origin_geom;
+    qc.prim[0] = ray.origin_prim;
     if (filter_self && ray.origin_geom != kNoPrimitive) qc.ctx.filter = reject_self_hit;
+}
+
+// A packet's context: every lane's origin, the self-hit filter where any lane has one (a lane
+// without an origin has kNoPrimitive, which no hit's ids match).
+void init_packet_context(QueryContext& qc, std::span<const Ray> rays, bool filter_self) {
+    rtcInitIntersectContext(&qc.ctx);
+    bool any = false;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        qc.geom[i] = rays[i].origin_geom;
+        qc.prim[i] = rays[i].origin_prim;
+        any |= rays[i].origin_geom != kNoPrimitive;
+    }
+    if (filter_self && any) qc.ctx.filter = reject_self_hit;
 }
 
 void fill_ray(RTCRay& r, const Ray& ray) {
@@ -41,6 +59,24 @@ void fill_ray(RTCRay& r, const Ray& ray) {
     r.mask = 0xffffffffu;
     r.id = 0;
     r.flags = 0;
+}
+
+// Lanes [0, rays.size()) of an 8-ray packet as fill_ray fills a single ray, id = lane; `valid`
+// marks them, the other lanes stay out of the query.
+void fill_packet(RTCRay8& r, int* valid, std::span<const Ray> rays) {
+    for (size_t i = 0; i < Scene::kPacket; ++i) {
+        valid[i] = i < rays.size() ? -1 : 0;
+        if (i >= rays.size()) continue;
+        const Ray& ray = rays[i];
+        r.org_x[i] = ray.o.x; r.org_y[i] = ray.o.y; r.org_z[i] = ray.o.z;
+        r.dir_x[i] = ray.d.x; r.dir_y[i] = ray.d.y; r.dir_z[i] = ray.d.z;
+        r.tnear[i] = 0.f;
+        r.tfar[i] = ray.tmax;
+        r.time[i] = 0.f;
+        r.mask[i] = 0xffffffffu;
+        r.id[i] = unsigned(i);
+        r.flags[i] = 0;
+    }
 }
 
 // Mitsuba's sphere map: u = phi / 2 pi in [0, 1) around local z from +x, v = theta / pi from +z.
@@ -154,29 +190,13 @@ Scene::~Scene() {
     if (device_) rtcReleaseDevice(device_);
 }
 
-bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
-    QueryContext qc;
-    init_context(qc, ray, false);
-    RTCRayHit rh;
-    fill_ray(rh.ray, ray);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(rtc_, &qc.ctx, &rh);
-    if (rh.hit.geomID == ray.origin_geom && rh.hit.primID == ray.origin_prim) {
-        // A rounding-error hit on the planar primitive the ray leaves (about 1 ray in 1e6):
-        // trace again with the filter, which is too costly to run on every closest-hit query.
-        init_context(qc, ray, true);
-        fill_ray(rh.ray, ray);
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(rtc_, &qc.ctx, &rh);
-    }
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-
-    const Shape& sh = shapes_[rh.hit.geomID];
-    hit.t = rh.ray.tfar;
-    hit.shape = rh.hit.geomID;
-    hit.prim = rh.hit.primID;
+// Inlined into both queries: out of line, the call and its SurfaceHit stores cost the path
+// tracer 3-5% (bench/ab_cores.sh).
+[[gnu::always_inline]] inline void Scene::fill_hit(const Ray& ray, float t, uint32_t geom, uint32_t prim, float u, float v, SurfaceHit& hit) const {
+    const Shape& sh = shapes_[geom];
+    hit.t = t;
+    hit.shape = geom;
+    hit.prim = prim;
     if (sh.kind == ShapeKind::Sphere) {
         sphere_hit_point(sh.sphere.center, sh.sphere.radius, ray, hit.t, hit);
         if (sh.uv_map != UvMap::None) hit.uv = sphere_uv(sh, hit.ng);
@@ -189,7 +209,7 @@ bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
         const auto& m = sh.mesh;
         uint32_t i0 = m.indices[3 * hit.prim], i1 = m.indices[3 * hit.prim + 1], i2 = m.indices[3 * hit.prim + 2];
         const Vec3 &p0 = m.positions[i0], &p1 = m.positions[i1], &p2 = m.positions[i2];
-        float b1 = std::clamp(rh.hit.u, 0.f, 1.f), b2 = std::clamp(rh.hit.v, 0.f, 1.f);
+        float b1 = std::clamp(u, 0.f, 1.f), b2 = std::clamp(v, 0.f, 1.f);
         if (b1 + b2 > 1.f) {
             float s = b1 + b2;
             b1 /= s;
@@ -221,7 +241,51 @@ bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
         if (sh.uv_map != UvMap::None) hit.uv = triangle_uv(sh, i0, i1, i2, b0, b1, b2);
         if (sh.bump_tex) apply_bump(sh, i0, i1, i2, hit);
     }
+}
+
+bool Scene::intersect(const Ray& ray, SurfaceHit& hit) const {
+    QueryContext qc;
+    init_context(qc, ray, false);
+    RTCRayHit rh;
+    fill_ray(rh.ray, ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rtc_, &qc.ctx, &rh);
+    if (rh.hit.geomID == ray.origin_geom && rh.hit.primID == ray.origin_prim) {
+        // A rounding-error hit on the planar primitive the ray leaves (about 1 ray in 1e6):
+        // trace again with the filter, which is too costly to run on every closest-hit query.
+        init_context(qc, ray, true);
+        fill_ray(rh.ray, ray);
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(rtc_, &qc.ctx, &rh);
+    }
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    fill_hit(ray, rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.u, rh.hit.v, hit);
     return true;
+}
+
+void Scene::intersect_packet(std::span<const Ray> rays, SurfaceHit* hits, bool* found) const {
+    if (rays.size() > kPacket) throw std::logic_error("Scene::intersect_packet: more than kPacket rays");
+    QueryContext qc;
+    init_packet_context(qc, rays, false);
+    alignas(32) int valid[kPacket];
+    alignas(32) RTCRayHit8 rh;
+    fill_packet(rh.ray, valid, rays);
+    for (size_t i = 0; i < kPacket; ++i) {
+        rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect8(valid, rtc_, &qc.ctx, &rh);
+    for (size_t i = 0; i < rays.size(); ++i) {
+        const uint32_t geom = rh.hit.geomID[i], prim = rh.hit.primID[i];
+        if (geom != RTC_INVALID_GEOMETRY_ID && geom == rays[i].origin_geom && prim == rays[i].origin_prim) {
+            found[i] = intersect(rays[i], hits[i]);  // the rare self-hit: intersect()'s own retry
+            continue;
+        }
+        found[i] = geom != RTC_INVALID_GEOMETRY_ID;
+        if (found[i]) fill_hit(rays[i], rh.ray.tfar[i], geom, prim, rh.hit.u[i], rh.hit.v[i], hits[i]);
+    }
 }
 
 bool Scene::occluded(const Ray& ray) const {
@@ -231,6 +295,17 @@ bool Scene::occluded(const Ray& ray) const {
     fill_ray(r, ray);
     rtcOccluded1(rtc_, &qc.ctx, &r);
     return r.tfar < 0.f;
+}
+
+void Scene::occluded_packet(std::span<const Ray> rays, bool* occluded) const {
+    if (rays.size() > kPacket) throw std::logic_error("Scene::occluded_packet: more than kPacket rays");
+    QueryContext qc;
+    init_packet_context(qc, rays, true);
+    alignas(32) int valid[kPacket];
+    alignas(32) RTCRay8 r;
+    fill_packet(r, valid, rays);
+    rtcOccluded8(valid, rtc_, &qc.ctx, &r);
+    for (size_t i = 0; i < rays.size(); ++i) occluded[i] = r.tfar[i] < 0.f;
 }
 
 }  // namespace omega

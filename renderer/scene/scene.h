@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,15 @@ public:
     bool intersect(const Ray& ray, SurfaceHit& hit) const;
     // Any hit within (0, ray.tmax). Thread-safe.
     bool occluded(const Ray& ray) const;
+    // Up to kPacket independent rays in one Embree packet query (rtcIntersect8 / rtcOccluded8):
+    // found[i], hits[i] and occluded[i] are what intersect() and occluded() give for rays[i],
+    // bit for bit (scene/packet_query_test.cpp), so a tracer may batch rays without changing an
+    // image. bench/throughput measures the headroom: incoherent rays ran 1.19x faster in packets
+    // of 8, and a bare loop with 8 paths in flight per thread 1.17x (Cornell box) to 1.37x
+    // (indirect-room) faster than one ray at a time. Thread-safe.
+    static constexpr size_t kPacket = 8;
+    void intersect_packet(std::span<const Ray> rays, SurfaceHit* hits, bool* found) const;
+    void occluded_packet(std::span<const Ray> rays, bool* occluded) const;
 
     // What the build accepted but the user should know (degenerate triangles dropped), one line
     // per shape, "FILE:LINE: shapes[i] 'name' (mesh.obj): ...". Callers add them to the scene's
@@ -109,6 +119,8 @@ public:
 
 private:
     Scene() = default;
+    // What intersect() makes of Embree's closest hit (geom, prim, barycentrics u, v, distance t).
+    void fill_hit(const Ray& ray, float t, uint32_t geom, uint32_t prim, float u, float v, SurfaceHit& hit) const;
     void add_embree_geometry(const std::function<bool()>& cancelled);
 
     SceneDesc desc_;

@@ -41,33 +41,47 @@ void sphere_bounds(const RTCBoundsFunctionArguments* args) {
     b->lower_z = lo(s->center.z - s->radius); b->upper_z = hi(s->center.z + s->radius);
 }
 
+// Both callbacks serve single rays (N = 1) and Scene's packets (N = 8) alike, lane by lane with
+// the same double arithmetic, so a packet's hits equal the single rays' bit for bit.
 void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
-    if (!args->valid[0]) return;
     const auto* s = static_cast<const SphereData*>(args->geometryUserPtr);
-    auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1: we only issue single rays
-    RTCRay& r = rh->ray;
-    Vec3d o{r.org_x, r.org_y, r.org_z}, d{r.dir_x, r.dir_y, r.dir_z};
-    double t0, t1;
-    if (!sphere_roots(*s, o, d, t0, t1)) return;
-    double t = t0 > r.tnear ? t0 : t1;
-    if (!(t > r.tnear) || !(t < r.tfar)) return;
-    Vec3d n = o + d * t - s->center;
-    r.tfar = float(t);
-    rh->hit.Ng_x = float(n.x); rh->hit.Ng_y = float(n.y); rh->hit.Ng_z = float(n.z);
-    rh->hit.u = 0; rh->hit.v = 0;
-    rh->hit.primID = args->primID;
-    rh->hit.geomID = args->geomID;
-    rh->hit.instID[0] = args->context->instID[0];
+    const unsigned N = args->N;
+    RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, N);
+    RTCHitN* h = RTCRayHitN_HitN(args->rayhit, N);
+    for (unsigned i = 0; i < N; ++i) {
+        if (!args->valid[i]) continue;
+        const float tnear = RTCRayN_tnear(ray, N, i);
+        float& tfar = RTCRayN_tfar(ray, N, i);
+        Vec3d o{RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i)};
+        Vec3d d{RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i)};
+        double t0, t1;
+        if (!sphere_roots(*s, o, d, t0, t1)) continue;
+        double t = t0 > tnear ? t0 : t1;
+        if (!(t > tnear) || !(t < tfar)) continue;
+        Vec3d n = o + d * t - s->center;
+        tfar = float(t);
+        RTCHitN_Ng_x(h, N, i) = float(n.x); RTCHitN_Ng_y(h, N, i) = float(n.y); RTCHitN_Ng_z(h, N, i) = float(n.z);
+        RTCHitN_u(h, N, i) = 0; RTCHitN_v(h, N, i) = 0;
+        RTCHitN_primID(h, N, i) = args->primID;
+        RTCHitN_geomID(h, N, i) = args->geomID;
+        RTCHitN_instID(h, N, i, 0) = args->context->instID[0];
+    }
 }
 
 void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
-    if (!args->valid[0]) return;
     const auto* s = static_cast<const SphereData*>(args->geometryUserPtr);
-    auto* r = reinterpret_cast<RTCRay*>(args->ray);
-    Vec3d o{r->org_x, r->org_y, r->org_z}, d{r->dir_x, r->dir_y, r->dir_z};
-    double t0, t1;
-    if (!sphere_roots(*s, o, d, t0, t1)) return;
-    if ((t0 > r->tnear && t0 < r->tfar) || (t1 > r->tnear && t1 < r->tfar)) r->tfar = -kInfinity;
+    const unsigned N = args->N;
+    RTCRayN* ray = args->ray;
+    for (unsigned i = 0; i < N; ++i) {
+        if (!args->valid[i]) continue;
+        const float tnear = RTCRayN_tnear(ray, N, i);
+        float& tfar = RTCRayN_tfar(ray, N, i);
+        Vec3d o{RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i)};
+        Vec3d d{RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i)};
+        double t0, t1;
+        if (!sphere_roots(*s, o, d, t0, t1)) continue;
+        if ((t0 > tnear && t0 < tfar) || (t1 > tnear && t1 < tfar)) tfar = -kInfinity;
+    }
 }
 
 }  // namespace
