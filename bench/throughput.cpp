@@ -106,56 +106,72 @@ double embree_raw_rate(const Scene& scene, int threads, long long rays, bool pac
     return double(rays) / s;
 }
 
+// What both bare loops share: the BVH, the camera, the shadow rays' target and the hit offset.
+struct BareScene {
+    RTCScene rtc;
+    const Sensor& sensor;
+    int w, h;
+    Vec3 target;
+    float eps;
+    explicit BareScene(const Scene& s)
+        : rtc(s.embree_scene()), sensor(s.sensor()), w(s.sensor().width), h(s.sensor().height),
+          target((s.bounds().lo + s.bounds().hi) * 0.5f), eps(1e-4f * max_component(s.bounds().hi - s.bounds().lo)) {}
+};
+
+// Rays/s of a bare loop on `threads` threads: rows(scene, ctx, y0, y1) traces the image rows
+// [y0, y1) and returns how many rays it traced.
+template <class Rows>
+double bare_rate(const Scene& scene, int threads, Rows&& rows) {
+    const BareScene bs(scene);
+    tbb::task_arena arena(threads);
+    std::atomic<uint64_t> rays{0};
+    auto t0 = std::chrono::steady_clock::now();
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, bs.h), [&](const tbb::blocked_range<int>& r) {
+            RTCIntersectContext ctx;
+            rtcInitIntersectContext(&ctx);
+            rays += rows(bs, ctx, r.begin(), r.end());
+        });
+    });
+    double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return double(rays.load()) / secs;
+}
+
 // The ceiling of a tracer that issues one ray at a time: the same camera rays and, per bounce,
 // one closest hit, one shadow ray (to the scene box's centre) and a cosine-distributed bounce,
 // to max_depth 9 without roulette, with no materials, lights, densities, film or sampler (a PCG
 // stream per pixel). Its rays/s against the raw rate is what the renderer's would be if its own
 // work per ray cost nothing.
 double bare_loop_rate(const Scene& scene, int threads, int spp) {
-    RTCScene rtc = scene.embree_scene();
-    const Sensor& sensor = scene.sensor();
-    const int w = sensor.width, h = sensor.height;
-    const SceneBounds& b = scene.bounds();
-    const Vec3 target = (b.lo + b.hi) * 0.5f;
-    const float eps = 1e-4f * max_component(b.hi - b.lo);
-    tbb::task_arena arena(threads);
-    std::atomic<uint64_t> rays{0};
-    auto t0 = std::chrono::steady_clock::now();
-    arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& r) {
-            uint64_t local = 0;
-            RTCIntersectContext ctx;
-            rtcInitIntersectContext(&ctx);
-            for (int y = r.begin(); y != r.end(); ++y)
-                for (int x = 0; x < w; ++x) {
-                    Rng rng = Rng::for_sample(3, uint64_t(y) * uint64_t(w) + uint64_t(x), 0);
-                    for (int s = 0; s < spp; ++s) {
-                        Ray ray = sensor.generate_ray({x + rng.next_1d(), y + rng.next_1d()}, {0.f, 0.f});
-                        for (int depth = 0; depth < 9; ++depth) {
-                            RTCRayHit rh;
-                            rh.ray = embree_ray(ray.o, ray.d, kInfinity);
-                            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                            rtcIntersect1(rtc, &ctx, &rh);
-                            ++local;
-                            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-                            Vec3 n = normalize(Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z));
-                            if (dot(n, ray.d) > 0) n = -n;
-                            const Vec3 p = ray.o + ray.d * rh.ray.tfar + n * eps;
-                            RTCRay sr = embree_ray(p, target - p, 1.f);
-                            rtcOccluded1(rtc, &ctx, &sr);
-                            ++local;
-                            const Vec3 l = square_to_cosine_hemisphere({rng.next_1d(), rng.next_1d()});
-                            const Frame f = Frame::from_normal(n);
-                            ray.o = p;
-                            ray.d = f.to_world(l);
-                        }
+    return bare_rate(scene, threads, [&](const BareScene& bs, RTCIntersectContext& ctx, int y0, int y1) {
+        uint64_t local = 0;
+        for (int y = y0; y != y1; ++y)
+            for (int x = 0; x < bs.w; ++x) {
+                Rng rng = Rng::for_sample(3, uint64_t(y) * uint64_t(bs.w) + uint64_t(x), 0);
+                for (int s = 0; s < spp; ++s) {
+                    Ray ray = bs.sensor.generate_ray({x + rng.next_1d(), y + rng.next_1d()}, {0.f, 0.f});
+                    for (int depth = 0; depth < 9; ++depth) {
+                        RTCRayHit rh;
+                        rh.ray = embree_ray(ray.o, ray.d, kInfinity);
+                        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                        rtcIntersect1(bs.rtc, &ctx, &rh);
+                        ++local;
+                        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+                        Vec3 n = normalize(Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z));
+                        if (dot(n, ray.d) > 0) n = -n;
+                        const Vec3 p = ray.o + ray.d * rh.ray.tfar + n * bs.eps;
+                        RTCRay sr = embree_ray(p, bs.target - p, 1.f);
+                        rtcOccluded1(bs.rtc, &ctx, &sr);
+                        ++local;
+                        const Vec3 l = square_to_cosine_hemisphere({rng.next_1d(), rng.next_1d()});
+                        const Frame f = Frame::from_normal(n);
+                        ray.o = p;
+                        ray.d = f.to_world(l);
                     }
                 }
-            rays += local;
-        });
+            }
+        return local;
     });
-    double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return double(rays.load()) / secs;
 }
 
 // The bare loop with 8 paths in flight per thread: each round traces every live path's next
@@ -164,98 +180,83 @@ double bare_loop_rate(const Scene& scene, int threads, int spp) {
 // cosine bounces, shadow rays to the box's centre), so the ratio of the two is what batching
 // could gain where ray queries were all the work.
 double bare_packet_loop_rate(const Scene& scene, int threads, int spp) {
-    RTCScene rtc = scene.embree_scene();
-    const Sensor& sensor = scene.sensor();
-    const int w = sensor.width, h = sensor.height;
-    const SceneBounds& b = scene.bounds();
-    const Vec3 target = (b.lo + b.hi) * 0.5f;
-    const float eps = 1e-4f * max_component(b.hi - b.lo);
-    tbb::task_arena arena(threads);
-    std::atomic<uint64_t> rays{0};
-    auto t0 = std::chrono::steady_clock::now();
-    arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& r) {
-            uint64_t local = 0;
-            RTCIntersectContext ctx;
-            rtcInitIntersectContext(&ctx);
-            struct Lane {
-                bool live = false;
-                int depth = 0;
-                Ray ray;
-                Rng rng{0, 0};
-            } lanes[8];
-            // The next (pixel, sample) in the bare loop's order, each sample with its own stream
-            // (the samples of a pixel are in flight together).
-            long long next = (long long)r.begin() * w * spp;
-            const long long end = (long long)r.end() * w * spp;
-            const auto refill = [&](Lane& l) {
-                if (next >= end) return;
-                const long long pixel = next / spp;
-                const int x = int(pixel % w), y = int(pixel / w);
-                l.rng = Rng::for_sample(3, uint64_t(pixel), uint64_t(next % spp));
-                l.ray = sensor.generate_ray({x + l.rng.next_1d(), y + l.rng.next_1d()}, {0.f, 0.f});
-                l.depth = 0;
-                l.live = true;
-                ++next;
-            };
-            for (Lane& l : lanes) refill(l);
-            for (;;) {
-                alignas(32) int valid[8];
-                alignas(32) RTCRayHit8 rh;
-                bool any = false;
-                for (int k = 0; k < 8; ++k) {
-                    valid[k] = lanes[k].live ? -1 : 0;
-                    any |= lanes[k].live;
-                    if (!lanes[k].live) continue;
-                    const Ray& ray = lanes[k].ray;
-                    rh.ray.org_x[k] = ray.o.x; rh.ray.org_y[k] = ray.o.y; rh.ray.org_z[k] = ray.o.z;
-                    rh.ray.dir_x[k] = ray.d.x; rh.ray.dir_y[k] = ray.d.y; rh.ray.dir_z[k] = ray.d.z;
-                    rh.ray.tnear[k] = 0; rh.ray.tfar[k] = kInfinity; rh.ray.mask[k] = ~0u;
-                    rh.ray.flags[k] = 0; rh.ray.time[k] = 0; rh.ray.id[k] = unsigned(k);
-                    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-                }
-                if (!any) break;
-                rtcIntersect8(valid, rtc, &ctx, &rh);
-                alignas(32) int svalid[8];
-                alignas(32) RTCRay8 sr;
-                Vec3 p[8], n[8];
-                for (int k = 0; k < 8; ++k) {
-                    svalid[k] = 0;
-                    if (!valid[k]) continue;
-                    ++local;
-                    if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
-                        lanes[k].live = false;
-                        continue;
-                    }
-                    const Ray& ray = lanes[k].ray;
-                    n[k] = normalize(Vec3(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]));
-                    if (dot(n[k], ray.d) > 0) n[k] = -n[k];
-                    p[k] = ray.o + ray.d * rh.ray.tfar[k] + n[k] * eps;
-                    const Vec3 d = target - p[k];
-                    svalid[k] = -1;
-                    sr.org_x[k] = p[k].x; sr.org_y[k] = p[k].y; sr.org_z[k] = p[k].z;
-                    sr.dir_x[k] = d.x; sr.dir_y[k] = d.y; sr.dir_z[k] = d.z;
-                    sr.tnear[k] = 0; sr.tfar[k] = 1.f; sr.mask[k] = ~0u; sr.flags[k] = 0; sr.time[k] = 0;
-                    sr.id[k] = unsigned(k);
-                }
-                rtcOccluded8(svalid, rtc, &ctx, &sr);
-                for (int k = 0; k < 8; ++k) {
-                    Lane& l = lanes[k];
-                    if (svalid[k]) {
-                        ++local;
-                        const Vec3 dl = square_to_cosine_hemisphere({l.rng.next_1d(), l.rng.next_1d()});
-                        l.ray.o = p[k];
-                        l.ray.d = Frame::from_normal(n[k]).to_world(dl);
-                        if (++l.depth == 9) l.live = false;
-                    }
-                    if (!l.live) refill(l);
-                }
+    return bare_rate(scene, threads, [&](const BareScene& bs, RTCIntersectContext& ctx, int y0, int y1) {
+        uint64_t local = 0;
+        struct Lane {
+            bool live = false;
+            int depth = 0;
+            Ray ray;
+            Rng rng{0, 0};
+        } lanes[8];
+        // The next (pixel, sample) in the bare loop's order, each sample with its own stream
+        // (the samples of a pixel are in flight together).
+        long long next = (long long)y0 * bs.w * spp;
+        const long long end = (long long)y1 * bs.w * spp;
+        const auto refill = [&](Lane& l) {
+            if (next >= end) return;
+            const long long pixel = next / spp;
+            const int x = int(pixel % bs.w), y = int(pixel / bs.w);
+            l.rng = Rng::for_sample(3, uint64_t(pixel), uint64_t(next % spp));
+            l.ray = bs.sensor.generate_ray({x + l.rng.next_1d(), y + l.rng.next_1d()}, {0.f, 0.f});
+            l.depth = 0;
+            l.live = true;
+            ++next;
+        };
+        for (Lane& l : lanes) refill(l);
+        for (;;) {
+            alignas(32) int valid[8];
+            alignas(32) RTCRayHit8 rh;
+            bool any = false;
+            for (int k = 0; k < 8; ++k) {
+                valid[k] = lanes[k].live ? -1 : 0;
+                any |= lanes[k].live;
+                if (!lanes[k].live) continue;
+                const Ray& ray = lanes[k].ray;
+                rh.ray.org_x[k] = ray.o.x; rh.ray.org_y[k] = ray.o.y; rh.ray.org_z[k] = ray.o.z;
+                rh.ray.dir_x[k] = ray.d.x; rh.ray.dir_y[k] = ray.d.y; rh.ray.dir_z[k] = ray.d.z;
+                rh.ray.tnear[k] = 0; rh.ray.tfar[k] = kInfinity; rh.ray.mask[k] = ~0u;
+                rh.ray.flags[k] = 0; rh.ray.time[k] = 0; rh.ray.id[k] = unsigned(k);
+                rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
             }
-            rays += local;
-        });
+            if (!any) break;
+            rtcIntersect8(valid, bs.rtc, &ctx, &rh);
+            alignas(32) int svalid[8];
+            alignas(32) RTCRay8 sr;
+            Vec3 p[8], n[8];
+            for (int k = 0; k < 8; ++k) {
+                svalid[k] = 0;
+                if (!valid[k]) continue;
+                ++local;
+                if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+                    lanes[k].live = false;
+                    continue;
+                }
+                const Ray& ray = lanes[k].ray;
+                n[k] = normalize(Vec3(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]));
+                if (dot(n[k], ray.d) > 0) n[k] = -n[k];
+                p[k] = ray.o + ray.d * rh.ray.tfar[k] + n[k] * bs.eps;
+                const Vec3 d = bs.target - p[k];
+                svalid[k] = -1;
+                sr.org_x[k] = p[k].x; sr.org_y[k] = p[k].y; sr.org_z[k] = p[k].z;
+                sr.dir_x[k] = d.x; sr.dir_y[k] = d.y; sr.dir_z[k] = d.z;
+                sr.tnear[k] = 0; sr.tfar[k] = 1.f; sr.mask[k] = ~0u; sr.flags[k] = 0; sr.time[k] = 0;
+                sr.id[k] = unsigned(k);
+            }
+            rtcOccluded8(svalid, bs.rtc, &ctx, &sr);
+            for (int k = 0; k < 8; ++k) {
+                Lane& l = lanes[k];
+                if (svalid[k]) {
+                    ++local;
+                    const Vec3 dl = square_to_cosine_hemisphere({l.rng.next_1d(), l.rng.next_1d()});
+                    l.ray.o = p[k];
+                    l.ray.d = Frame::from_normal(n[k]).to_world(dl);
+                    if (++l.depth == 9) l.live = false;
+                }
+                if (!l.live) refill(l);
+            }
+        }
+        return local;
     });
-    double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return double(rays.load()) / secs;
 }
 
 struct Spread {

@@ -41,6 +41,22 @@ void sphere_bounds(const RTCBoundsFunctionArguments* args) {
     b->lower_z = lo(s->center.z - s->radius); b->upper_z = hi(s->center.z + s->radius);
 }
 
+// Lane i of a ray query and the roots of its line against the sphere (found: it meets it).
+struct LaneRoots {
+    Vec3d o, d;
+    float tnear;
+    bool found;
+    double t0, t1;
+};
+LaneRoots lane_roots(const SphereData& s, RTCRayN* ray, unsigned N, unsigned i) {
+    LaneRoots r;
+    r.o = {RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i)};
+    r.d = {RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i)};
+    r.tnear = RTCRayN_tnear(ray, N, i);
+    r.found = sphere_roots(s, r.o, r.d, r.t0, r.t1);
+    return r;
+}
+
 // Both callbacks serve single rays (N = 1) and Scene's packets (N = 8) alike, lane by lane with
 // the same double arithmetic, so a packet's hits equal the single rays' bit for bit.
 void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
@@ -50,12 +66,12 @@ void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
     RTCHitN* h = RTCRayHitN_HitN(args->rayhit, N);
     for (unsigned i = 0; i < N; ++i) {
         if (!args->valid[i]) continue;
-        const float tnear = RTCRayN_tnear(ray, N, i);
+        const LaneRoots r = lane_roots(*s, ray, N, i);
+        if (!r.found) continue;
+        const float tnear = r.tnear;
         float& tfar = RTCRayN_tfar(ray, N, i);
-        Vec3d o{RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i)};
-        Vec3d d{RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i)};
-        double t0, t1;
-        if (!sphere_roots(*s, o, d, t0, t1)) continue;
+        const double t0 = r.t0, t1 = r.t1;
+        const Vec3d &o = r.o, &d = r.d;
         double t = t0 > tnear ? t0 : t1;
         if (!(t > tnear) || !(t < tfar)) continue;
         Vec3d n = o + d * t - s->center;
@@ -74,13 +90,10 @@ void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
     RTCRayN* ray = args->ray;
     for (unsigned i = 0; i < N; ++i) {
         if (!args->valid[i]) continue;
-        const float tnear = RTCRayN_tnear(ray, N, i);
+        const LaneRoots r = lane_roots(*s, ray, N, i);
+        if (!r.found) continue;
         float& tfar = RTCRayN_tfar(ray, N, i);
-        Vec3d o{RTCRayN_org_x(ray, N, i), RTCRayN_org_y(ray, N, i), RTCRayN_org_z(ray, N, i)};
-        Vec3d d{RTCRayN_dir_x(ray, N, i), RTCRayN_dir_y(ray, N, i), RTCRayN_dir_z(ray, N, i)};
-        double t0, t1;
-        if (!sphere_roots(*s, o, d, t0, t1)) continue;
-        if ((t0 > tnear && t0 < tfar) || (t1 > tnear && t1 < tfar)) tfar = -kInfinity;
+        if ((r.t0 > r.tnear && r.t0 < tfar) || (r.t1 > r.tnear && r.t1 < tfar)) tfar = -kInfinity;
     }
 }
 
