@@ -60,7 +60,7 @@ void BreakdownCollector::add_path_sample(int x, int y, const PathClassTracker& c
     l.stats.add_unit(l.unit);
 }
 
-void BreakdownCollector::add_splatting_sample(int x, int y, const BdptScratch& scratch, const std::vector<Splat>& splats,
+void BreakdownCollector::add_splatting_sample(int x, int y, const BdptScratch& scratch, std::span<const Splat> splats,
                                               const Filter& filter) {
     Local& l = local_.local();
     l.unit.clear();

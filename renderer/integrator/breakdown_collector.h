@@ -15,6 +15,8 @@
 // from the driver thread while no worker runs.
 #include <tbb/enumerable_thread_specific.h>
 
+#include <span>
+
 #include "film/filter.h"
 #include "integrator/bdpt_tracer.h"
 #include "integrator/breakdown.h"
@@ -32,7 +34,7 @@ public:
     void add_path_sample(int x, int y, const PathClassTracker& classes);
     // Light tracing and BDPT: camera sample at pixel (x, y) with its splats (scratch holds their
     // classes, as the tracer left them).
-    void add_splatting_sample(int x, int y, const BdptScratch& scratch, const std::vector<Splat>& splats,
+    void add_splatting_sample(int x, int y, const BdptScratch& scratch, std::span<const Splat> splats,
                               const Filter& filter);
 
     BreakdownReport report() const;

@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <span>
 
 #include "film/filter.h"
 #include <chrono>
@@ -136,7 +137,6 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                 [&](const tbb::blocked_range<size_t>& range) {
                     TracerStats& st = stats_.local();
                     BdptScratch& scratch = scratch_.local();
-                    std::vector<Splat>& local = sample_splats_.local();
                     std::vector<Splat>& out = tile_raw_splats_.local();
                     std::vector<StrategyContribution>* per = strategies_ ? &sample_strategies_.local() : nullptr;
                     for (size_t ti = range.begin(); ti != range.end(); ++ti) {
@@ -157,22 +157,25 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
                                     sampler.start_dimension(dims::kLens);
                                     Vec2 u_lens = sampler.next_2d_if(lens && camera_ray);
                                     Ray ray = camera_ray ? sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens) : Ray{};
-                                    local.clear();
+                                    // The sample appends its splats to the tile's list directly;
+                                    // a sample that is dropped takes them back out.
+                                    const size_t first_splat = out.size();
                                     if (per) per->clear();
-                                    Rgb L = bdpt_->sample(ray, sampler, st, scratch, local, per);
+                                    Rgb L = bdpt_->sample(ray, sampler, st, scratch, out, per);
                                     ++st.samples;
+                                    const std::span<const Splat> mine(out.data() + first_splat, out.size() - first_splat);
                                     bool finite = is_finite(L);
-                                    for (const Splat& sp : local) finite = finite && is_finite(sp.value);
+                                    for (const Splat& sp : mine) finite = finite && is_finite(sp.value);
                                     if (!finite) {
                                         ++st.nonfinite;  // the whole sample is dropped, splats included
+                                        out.resize(first_splat);
                                         continue;
                                     }
                                     sums[index(x, y)] += Vec3d(L);
                                     if (aovs)
                                         for (size_t a = 0; a < aovs->size(); ++a)
                                             aovs->add_camera(a, index(x, y), scratch.aov_camera[a]);
-                                    if (breakdown_) breakdown_->add_splatting_sample(x, y, scratch, local, filter);
-                                    out.insert(out.end(), local.begin(), local.end());
+                                    if (breakdown_) breakdown_->add_splatting_sample(x, y, scratch, mine, filter);
                                     if (per)
                                         for (const auto& c : *per) {
                                             if (c.splat) tile_strategy_splats[ti - w0].push_back(c);

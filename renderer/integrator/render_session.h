@@ -123,8 +123,7 @@ private:
     Film film_;
     tbb::enumerable_thread_specific<TracerStats> stats_;  // cache-aligned per thread
     tbb::enumerable_thread_specific<BdptScratch> scratch_;
-    tbb::enumerable_thread_specific<std::vector<Splat>> sample_splats_;
-    tbb::enumerable_thread_specific<std::vector<Splat>> tile_raw_splats_;  // one tile's, before bucketing
+    tbb::enumerable_thread_specific<std::vector<Splat>> tile_raw_splats_;  // one tile's, before bucketing (its samples append to it)
     std::unique_ptr<SplatBands> bands_;  // light tracing and BDPT: the crop's row bands
     std::vector<BandedSplats> banded_tiles_;  // one wave's splats by tile and band (driver thread sizes it)
     std::vector<Vec3d> batch_sums_;    // crop-sized, one batch's camera estimates (driver thread only)

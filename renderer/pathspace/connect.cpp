@@ -272,11 +272,13 @@ std::optional<Connection> connect(const Scene& scene, const std::vector<PathVert
         // BDPT's common case: no table, the subpaths' sums beyond the edge (pathspace/mis_prefix.h).
         const PathVertex& a = s == 0 ? camera[size_t(t - 1)] : (s == 1 && sampled_light ? *sampled_light : light[size_t(s - 1)]);
         const PathVertex& b = t == 1 && sampled_sensor ? *sampled_sensor : camera[size_t(t - 1)];
-        EdgeDensities e;
-        if (s >= 1)
-            e = edge_densities(scene, a, s >= 2 ? &light[size_t(s - 2)] : nullptr, b, t >= 2 ? &camera[size_t(t - 2)] : nullptr,
-                               s, t, s >= 2 && t >= 2 ? &ly : nullptr, s >= 2 && t >= 2 ? &lz : nullptr,
-                               sensor_we ? &*sensor_we : nullptr);
+        // Initialised by the call itself: assigned after a default construction, the result was
+        // copied over with a `rep movsb`, a stall in every connection.
+        const EdgeDensities e =
+            s >= 1 ? edge_densities(scene, a, s >= 2 ? &light[size_t(s - 2)] : nullptr, b,
+                                    t >= 2 ? &camera[size_t(t - 2)] : nullptr, s, t, s >= 2 && t >= 2 ? &ly : nullptr,
+                                    s >= 2 && t >= 2 ? &lz : nullptr, sensor_we ? &*sensor_we : nullptr)
+                   : EdgeDensities{};
         w = mis_weight_prefixed(scene, cstats.prefix, s, t, e, sampled_light, sampled_sensor);
     } else {
         FullPathPdfs& fp = cstats.table;
