@@ -17,25 +17,41 @@ Vec2 sincos_quarter_pi(float x) {
     return {c, s};
 }
 
+namespace {
+
 // Shirley-Chiu concentric map: low distortion, keeps stratification. Its angle is pi/4 times a
 // ratio in [-1, 1], or pi/2 minus that (cos and sin swapped): always within sincos_quarter_pi.
 // Which case applies is a coin flip per sample, so it is chosen by selects, not a branch: a
 // mispredicted branch here cost more than the arithmetic of the map (perf, indirect-room path).
-Vec2 square_to_uniform_disk_concentric(Vec2 u) {
+// Returns the disk point and its radius r (signed: the larger coordinate of 2u - 1).
+struct DiskPoint {
+    Vec2 d;
+    float r;
+};
+inline DiskPoint concentric_map(Vec2 u) {
     float ox = 2.f * u.x - 1.f, oy = 2.f * u.y - 1.f;
-    if (ox == 0 && oy == 0) return {0, 0};
+    if (ox == 0 && oy == 0) return {{0, 0}, 0};
     const bool x_major = std::abs(ox) > std::abs(oy);
     const auto pick = [x_major](float a, float b) { return select_bits(x_major, a, b); };
     const float r = pick(ox, oy);
     const Vec2 cs = sincos_quarter_pi((kPi / 4.f) * (pick(oy, ox) / r));
-    return {r * pick(cs.x, cs.y), r * pick(cs.y, cs.x)};
+    return {{r * pick(cs.x, cs.y), r * pick(cs.y, cs.x)}, r};
 }
 
+}  // namespace
+
+Vec2 square_to_uniform_disk_concentric(Vec2 u) { return concentric_map(u).d; }
+
 Vec3 square_to_cosine_hemisphere(Vec2 u) {
-    Vec2 d = square_to_uniform_disk_concentric(u);
-    float z = safe_sqrt(1.f - d.x * d.x - d.y * d.y);
+    const DiskPoint p = concentric_map(u);
+    // The height from the radius, 1 - r^2, not from the point, 1 - |d|^2: it needs nothing from
+    // the angle's division and polynomial, so the square root runs beside them instead of after
+    // them, on every diffuse bounce's way to its next ray (path tracer, bench/ab_cores.sh
+    // medians +1.8% and +2.9% on a VM whose noise is +-4%). Near the rim, where 1 - x cancels,
+    // fewer roundings feed it.
+    const float z = safe_sqrt(1.f - p.r * p.r);
     // Keep z strictly positive so the pdf never vanishes for a sampled direction.
-    return {d.x, d.y, std::max(z, 1e-7f)};
+    return {p.d.x, p.d.y, std::max(z, 1e-7f)};
 }
 
 Vec3 square_to_uniform_sphere(Vec2 u) {

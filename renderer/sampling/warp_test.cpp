@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -132,6 +134,27 @@ TEST(Warp, ConcentricDiskEqualsTheBranchingForm) {
         EXPECT_EQ(std::bit_cast<uint32_t>(a.x), std::bit_cast<uint32_t>(b.x)) << u.x << " " << u.y;
         EXPECT_EQ(std::bit_cast<uint32_t>(a.y), std::bit_cast<uint32_t>(b.y)) << u.x << " " << u.y;
     }
+}
+
+// The cosine warp lifts the concentric disk point, unchanged, to the height its radius gives
+// (sqrt(1 - r^2)): a unit vector to rounding, rim included, and the same x and y as the disk.
+TEST(Warp, CosineHemisphereLiftsTheDiskPointToUnitLength) {
+    Rng rng(12, 0);
+    std::vector<Vec2> us = {{0.5f, 0.5f}, {0.f, 0.f}, {1.f - 0x1p-24f, 0.5f}, {0.5f, 1.f - 0x1p-24f},
+                            {0.f, 0.5f}, {1.f - 0x1p-24f, 1.f - 0x1p-24f}, {0.5f + 0x1p-24f, 0.5f}};
+    for (int i = 0; i < 200000; ++i) us.push_back(next_2d(rng));
+    double worst = 0;
+    for (Vec2 u : us) {
+        const Vec3 w = square_to_cosine_hemisphere(u);
+        const Vec2 d = square_to_uniform_disk_concentric(u);
+        ASSERT_EQ(std::bit_cast<uint32_t>(w.x), std::bit_cast<uint32_t>(d.x)) << u.x << " " << u.y;
+        ASSERT_EQ(std::bit_cast<uint32_t>(w.y), std::bit_cast<uint32_t>(d.y)) << u.x << " " << u.y;
+        ASSERT_GT(w.z, 0.f) << u.x << " " << u.y;
+        const double len = std::sqrt(double(w.x) * w.x + double(w.y) * w.y + double(w.z) * w.z);
+        worst = std::max(worst, std::abs(len - 1.0));
+    }
+    EXPECT_LT(worst, 1e-6);
+    EXPECT_EQ(square_to_cosine_hemisphere({0.5f, 0.5f}).z, 1.f);  // the centre: straight up
 }
 
 TEST(Warp, CosineHemisphere) {
