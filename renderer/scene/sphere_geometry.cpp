@@ -68,13 +68,10 @@ void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
         if (!args->valid[i]) continue;
         const LaneRoots r = lane_roots(*s, ray, N, i);
         if (!r.found) continue;
-        const float tnear = r.tnear;
         float& tfar = RTCRayN_tfar(ray, N, i);
-        const double t0 = r.t0, t1 = r.t1;
-        const Vec3d &o = r.o, &d = r.d;
-        double t = t0 > tnear ? t0 : t1;
-        if (!(t > tnear) || !(t < tfar)) continue;
-        Vec3d n = o + d * t - s->center;
+        const double t = r.t0 > r.tnear ? r.t0 : r.t1;
+        if (!(t > r.tnear) || !(t < tfar)) continue;
+        const Vec3d n = r.o + r.d * t - s->center;
         tfar = float(t);
         RTCHitN_Ng_x(h, N, i) = float(n.x); RTCHitN_Ng_y(h, N, i) = float(n.y); RTCHitN_Ng_z(h, N, i) = float(n.z);
         RTCHitN_u(h, N, i) = 0; RTCHitN_v(h, N, i) = 0;
