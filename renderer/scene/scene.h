@@ -93,6 +93,13 @@ public:
     // image. bench/throughput measures the headroom: incoherent rays ran 1.19x faster in packets
     // of 8, and a bare loop with 8 paths in flight per thread 1.17x (Cornell box) to 1.37x
     // (indirect-room) faster than one ray at a time. Thread-safe.
+    // No tracer uses them yet, because neither batching that was tried paid:
+    // - BDPT's shadow rays of one sample in one packet (0dff7d2's session): 0.98-1.03.
+    // - The path tracer with 8 paths in flight per thread, its walk cut into resumable steps,
+    //   the paths' next rays in one intersect_packet (bench/ab_cores.sh against one path at a
+    //   time, same bits): indirect-room 1.02, Cornell 0.95. The same lanes with one query per ray
+    //   read 0.89: 8 interleaved walks, each with its state in memory rather than in registers,
+    //   cost 11% and the packets won back about 13%.
     static constexpr size_t kPacket = 8;
     void intersect_packet(std::span<const Ray> rays, SurfaceHit* hits, bool* found) const;
     void occluded_packet(std::span<const Ray> rays, bool* occluded) const;
