@@ -26,9 +26,7 @@ Rect crop_of(const FilmDesc& d) {
 
 }  // namespace
 
-Film::Film(const FilmDesc& desc) : desc_(desc), filter_(desc), crop_(crop_of(desc)) {
-    px_.assign(size_t(crop_.area()), Accum{});
-}
+Film::Film(const FilmDesc& desc) : desc_(desc), filter_(desc), crop_(crop_of(desc)), px_(size_t(crop_.area())) {}
 
 int Film::width() const { return desc_.width; }
 int Film::height() const { return desc_.height; }

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "film/filter.h"
+#include "film/zeroed_array.h"
 #include "math/vec.h"
 #include "scene/scene_desc.h"
 
@@ -137,7 +138,7 @@ private:
     FilmDesc desc_;
     Filter filter_;
     Rect crop_;
-    std::vector<Accum> px_;  // crop-sized, row-major
+    ZeroedArray<Accum> px_;  // crop-sized, row-major; pages fault in as tiles first touch them
 };
 
 // Header attributes DESIGN.md names (omega.*).
