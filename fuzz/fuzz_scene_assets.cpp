@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <system_error>
 
 #include "io/file_gate.h"
 #include "scene/scene.h"
@@ -86,6 +87,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (name_end == std::string::npos) break;
         std::string name = clean_name(input.substr(pos + 5, name_end - pos - 5));
         std::size_t next = input.find("\n--- ", name_end);
+        // An input's file replaces a bait link of the same name: written through the link, the
+        // harness itself opened the file outside the job (and blocked on the FIFO's).
+        std::error_code ec;
+        fs::remove(bait.files / name, ec);
         std::ofstream(bait.files / name, std::ios::binary)
             << input.substr(name_end + 1, next == std::string::npos ? std::string::npos : next - name_end - 1);
         pos = next;
