@@ -6,7 +6,12 @@
 // the job's thread before its first tile could start; now each page faults in when a render
 // thread first adds to it, spread over the first pass and across the threads. (C++20: calloc
 // creates the array's implicit-lifetime objects, with the zero bytes as their values.)
-// Alignment up to 64 (a cache line) is kept by over-allocating and aligning the start.
+// Alignment up to 64 (a cache line) is kept by over-allocating and aligning the start; a block of
+// 2 MB or more starts on a 2 MB boundary (2 MB more address space, never touched), so every one
+// of its 2 MB pages can be a huge page: calloc's own start is only page-aligned, which left a
+// 4 MB block (a 256 x 256 film) one huge page and 512 small ones.
+// T need not be trivially default-constructible: a trivially copyable type is an implicit-lifetime
+// type, and its zero bytes are its value (a Vec3d of zeros).
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -20,19 +25,22 @@ namespace omega {
 
 template <class T>
 class ZeroedArray {
-    static_assert(std::is_trivially_copyable_v<T> && std::is_trivially_default_constructible_v<T>);
+    static_assert(std::is_trivially_copyable_v<T>);
     static_assert(alignof(T) <= 64);
+    static constexpr size_t kHuge = size_t(2) << 20;
 
 public:
     ZeroedArray() = default;
     explicit ZeroedArray(size_t n) : n_(n) {
         if (n == 0) return;
-        if (n > (SIZE_MAX - alignof(T)) / sizeof(T)) throw std::bad_alloc();
-        raw_ = std::calloc(n * sizeof(T) + alignof(T), 1);
+        if (n > (SIZE_MAX - kHuge) / sizeof(T)) throw std::bad_alloc();
+        const size_t bytes = n * sizeof(T);
+        const size_t align = bytes >= kHuge ? kHuge : alignof(T);
+        raw_ = std::calloc(bytes + align, 1);
         if (!raw_) throw std::bad_alloc();
-        const uintptr_t a = (reinterpret_cast<uintptr_t>(raw_) + alignof(T) - 1) & ~uintptr_t(alignof(T) - 1);
+        const uintptr_t a = (reinterpret_cast<uintptr_t>(raw_) + align - 1) & ~uintptr_t(align - 1);
         data_ = reinterpret_cast<T*>(a);
-        huge_pages(raw_, n * sizeof(T) + alignof(T));
+        huge_pages(data_, bytes);
     }
     ZeroedArray(const ZeroedArray& o) : ZeroedArray(o.n_) {
         if (n_) std::memcpy(data_, o.data_, n_ * sizeof(T));
@@ -63,7 +71,6 @@ private:
     // request (Debian's default, `madvise`): a 64 MB film then faults in 32 times, not 16384.
     // Only advice: where it is refused, the block keeps its small pages.
     static void huge_pages(void* p, size_t bytes) {
-        constexpr uintptr_t kHuge = uintptr_t(2) << 20;
         const uintptr_t b = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
         const uintptr_t e = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
         if (e > b) (void)madvise(reinterpret_cast<void*>(b), e - b, MADV_HUGEPAGE);

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "film/film.h"
+#include "math/vec.h"
 
 namespace omega {
 namespace {
@@ -33,6 +34,27 @@ TEST(ZeroedArray, ZeroFilledAndAligned) {
     ZeroedArray<Line> empty(0);
     EXPECT_TRUE(empty.empty());
     EXPECT_EQ(empty.begin(), empty.end());
+}
+
+// A block of 2 MB or more starts on a 2 MB boundary, so all its whole 2 MB pages can be huge
+// pages; a smaller one keeps the type's alignment only. Vec3d (default member initialisers, so
+// not trivially default-constructible) is held as its zero bytes.
+TEST(ZeroedArray, LargeBlocksStartOnAHugePage) {
+    constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+    for (size_t n : {kHuge / sizeof(Line), size_t(65536), size_t(1) << 20}) {
+        ZeroedArray<Line> a(n);
+        EXPECT_EQ(reinterpret_cast<uintptr_t>(a.data()) % kHuge, 0u) << n << " lines";
+        EXPECT_EQ(a[n - 1].n, 0u);
+    }
+    ZeroedArray<Vec3d> v(256 * 256);  // 1.5 MB: below the threshold
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(v.data()) % alignof(Vec3d), 0u);
+    ZeroedArray<Vec3d> w(1024 * 1024);  // 24 MB
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(w.data()) % kHuge, 0u);
+    for (size_t i : {size_t(0), size_t(12345), w.size() - 1}) {
+        EXPECT_EQ(w[i].x, 0.0);
+        EXPECT_EQ(w[i].y, 0.0);
+        EXPECT_EQ(w[i].z, 0.0);
+    }
 }
 
 TEST(ZeroedArray, CopiesAndMovesOwnTheirBytes) {

@@ -101,15 +101,17 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
     const bool camera_ray = bdpt_->uses_camera_ray();
     const uint64_t width = uint64_t(sensor.width);
     const double inv_light_paths_per_sample = 1.0 / double(std::max<long long>(1, crop.area()));
-    std::vector<Vec3d>& sums = batch_sums_;
-    std::vector<Vec3d>& splats = batch_splats_;
+    ZeroedArray<Vec3d>& sums = batch_sums_;
+    ZeroedArray<Vec3d>& splats = batch_splats_;
     auto index = [&](int x, int y) { return size_t(y - crop.y0) * size_t(crop.width()) + size_t(x - crop.x0); };
-    sums.resize(size_t(crop.area()));
-    splats.resize(size_t(crop.area()));
+    if (sums.size() != size_t(crop.area())) {
+        sums = ZeroedArray<Vec3d>(size_t(crop.area()));
+        splats = ZeroedArray<Vec3d>(size_t(crop.area()));
+    }
     bands_->for_each_band(arena, [&](const Rect& rows) {
         const size_t a = index(rows.x0, rows.y0), b = a + size_t(rows.area());
-        std::fill(sums.begin() + ptrdiff_t(a), sums.begin() + ptrdiff_t(b), Vec3d(0.0));
-        std::fill(splats.begin() + ptrdiff_t(a), splats.begin() + ptrdiff_t(b), Vec3d(0.0));
+        std::fill(sums.begin() + a, sums.begin() + b, Vec3d(0.0));
+        std::fill(splats.begin() + a, splats.begin() + b, Vec3d(0.0));
     });
     AovImages* aovs = aovs_.get();
     if (aovs) aovs->begin_batch();

@@ -15,6 +15,7 @@
 #include <tbb/task_arena.h>
 
 #include "film/film.h"
+#include "film/zeroed_array.h"
 #include "integrator/aov_images.h"
 #include "integrator/bdpt_tracer.h"
 #include "integrator/breakdown_collector.h"
@@ -126,8 +127,12 @@ private:
     tbb::enumerable_thread_specific<std::vector<Splat>> tile_raw_splats_;  // one tile's, before bucketing (its samples append to it)
     std::unique_ptr<SplatBands> bands_;  // light tracing and BDPT: the crop's row bands
     std::vector<BandedSplats> banded_tiles_;  // one wave's splats by tile and band (driver thread sizes it)
-    std::vector<Vec3d> batch_sums_;    // crop-sized, one batch's camera estimates (driver thread only)
-    std::vector<Vec3d> batch_splats_;  // crop-sized, one batch's light-path splats (driver thread only)
+    // Crop-sized, one batch's camera estimates and light-path splats (allocated and cleared by
+    // the driver thread, cleared band by band in parallel). Zeroed pages: a value-initialised
+    // vector was written whole by the driver thread alone, every page a fault, before the first
+    // batch could start (light tracing's first pass ran 25% slower than its others).
+    ZeroedArray<Vec3d> batch_sums_;
+    ZeroedArray<Vec3d> batch_splats_;
     std::atomic<bool> aborted_{false};
     TileFn on_tile_;
     TileRunner tile_runner_;
