@@ -44,9 +44,7 @@ def first_tile(d, size, spp):
 
 def loop_cpu_seconds(pid):
     """CPU time of omegad's main thread, which runs the event loop (sends frames to watchers)."""
-    with open(f"/proc/{pid}/task/{pid}/stat") as f:
-        fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    return cpu_seconds(pid, tid=pid)
 
 
 def throughput(d, watchers, loop=None, busy=False):

@@ -188,9 +188,10 @@ def watch(c, job, timeout=120):
             raise AssertionError(f"unexpected frame {h}")
 
 
-def cpu_seconds(pid):
-    """User + system CPU time of a live process: what it spent, whatever else shares the cores."""
-    with open(f"/proc/{pid}/stat") as f:
+def cpu_seconds(pid, tid=None):
+    """User + system CPU time of a live process (or of its thread `tid`): what it spent, whatever
+    else shares the cores."""
+    with open(f"/proc/{pid}/stat" if tid is None else f"/proc/{pid}/task/{tid}/stat") as f:
         fields = f.read().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
