@@ -291,6 +291,7 @@ void RenderWorker::run() {
         t.pass = pass_in_progress.load();
         t.spp = static_cast<std::uint64_t>(spp);
         t.tile = encode_tile(session.film(), rect, m, aov_films);
+        t.first = first_tile_.exchange(false);
         streamed.fetch_add(1);
         on_tile_(std::move(t));
       });

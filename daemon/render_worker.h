@@ -49,6 +49,7 @@ struct TileUpdate {
   std::uint64_t pass = 0;  // the pass in progress
   std::uint64_t spp = 0;
   EncodedTile tile;
+  bool first = false;  // the first tile streamed since someone began watching: it goes at once
 };
 
 struct WorkerResult {
@@ -95,7 +96,10 @@ class RenderWorker {
   void request_stop(StopKind k);
   StopKind stop_requested() const { return static_cast<StopKind>(stop_.load()); }
   // Any thread: whether pass boundaries should encode tiles (someone subscribes).
-  void set_watched(bool w) { watched_.store(w); }
+  void set_watched(bool w) {
+    if (w && !watched_.exchange(true)) first_tile_.store(true);
+    if (!w) watched_.store(false);
+  }
   void join();
   std::uint64_t job() const { return spec_.job; }
 
@@ -112,6 +116,7 @@ class RenderWorker {
   std::thread thread_;
   std::atomic<int> stop_{0};
   std::atomic<bool> watched_{false};
+  std::atomic<bool> first_tile_{true};  // the next streamed tile is TileUpdate::first
   std::mutex mutex_;                        // guards session_
   omega::RenderSession* session_ = nullptr;  // set by the driver while run() is in progress
 };

@@ -26,6 +26,7 @@
 #include "daemon/render_worker.h"
 #include "daemon/signals.h"
 #include "daemon/thread_share.h"
+#include "daemon/tile_inbox.h"
 #include "daemon/tile_publisher.h"
 #include "daemon/tls.h"
 #include "daemon/unit_fold.h"
@@ -38,6 +39,8 @@ protocol::ErrorCode store_error_code(const std::string& what);
 
 class Server : public FrameSink {
  public:
+  // How long a streamed tile may wait for others to share its wake-up of the loop (tile_inbox.h).
+  static constexpr double kTileBatchSeconds = 0.05;
   // overrides: re-applied after every (re)load of the config file (command-line flags).
   Server(std::string config_path, std::function<void(Config&)> overrides, Log& log);
   ~Server() override;
@@ -197,6 +200,12 @@ class Server : public FrameSink {
   std::uint64_t next_conn_ = 1;
   std::uint64_t next_staging_ = 1;
   TilePublisher publisher_{*this};
+  // The render threads' finished tiles, handed to on_tile in batches (tile_inbox.h). Before
+  // active_: the workers that push into it are destroyed first.
+  TileInbox tile_inbox_{loop_, kTileBatchSeconds, [this](std::vector<TileUpdate> tiles) {
+                          for (TileUpdate& t : tiles) on_tile(std::move(t));
+                          flush_dirty();
+                        }};
   std::map<std::uint64_t, Active> active_;
   std::map<std::uint64_t, Memo> memo_;
   std::map<std::uint64_t, WorkJob> work_;  // unfinished worker jobs

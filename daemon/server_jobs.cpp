@@ -214,13 +214,8 @@ void Server::start_job(const JobRecord& r) {
           flush_dirty();
         });
       },
-      // Render threads, while someone watches: each finished tile goes out at once.
-      [this](TileUpdate t) {
-        loop_.post([this, t = std::move(t)]() mutable {
-          on_tile(std::move(t));
-          flush_dirty();
-        });
-      });
+      // Render threads, while someone watches: finished tiles go out in batches (tile_inbox.h).
+      [this](TileUpdate t) { tile_inbox_.push(std::move(t)); });
   worker->set_watched(publisher_.watchers(r.id) > 0);
   store_->set_state(r.id, JobState::running);  // throws before the worker starts: still queued
   share_.add(r.id, share_weight(r.priority));
@@ -231,6 +226,7 @@ void Server::start_job(const JobRecord& r) {
 }
 
 void Server::on_pass(PassUpdate u) {
+  tile_inbox_.drain();  // the pass's streamed tiles go before its progress
   Memo& m = memo_[u.job];
   m.snapshot = u.snapshot;
   m.film = u.film;
@@ -258,6 +254,7 @@ void Server::on_tile(TileUpdate t) {
 }
 
 void Server::on_finish(WorkerResult res) {
+  tile_inbox_.drain();  // the last pass's tiles go before done
   auto it = active_.find(res.job);
   if (it != active_.end()) {
     it->second.worker->join();
