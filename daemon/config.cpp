@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -22,6 +23,17 @@ struct Reader {
   YAML::Node get(const std::string& key) {
     seen.insert(key);
     return root[key];
+  }
+  // Refuses a key given twice in `map`: yaml-cpp keeps both and a lookup reads the first, so an
+  // override appended to the file was ignored without a word. Which one was meant is not for
+  // omegad to guess.
+  void unique_keys(const YAML::Node& map, const std::string& prefix) const {
+    std::map<std::string, int> first_line;
+    for (const auto& kv : map) {
+      const std::string k = kv.first.as<std::string>();
+      const auto [it, fresh] = first_line.emplace(k, kv.first.Mark().line + 1);
+      if (!fresh) fail(prefix + k, kv.first.Mark(), "given twice (first at line " + std::to_string(it->second) + ")");
+    }
   }
   template <class T>
   void scalar(const std::string& key, T& out) {
@@ -62,6 +74,7 @@ Config load_config(const std::string& path) {
   if (root.IsNull()) return c;
   if (!root.IsMap()) throw std::runtime_error(path + ":1: the config must be a mapping");
   Reader r{path, root, {}};
+  r.unique_keys(root, "");
   r.strings("listen", c.listen);
   r.scalar("state_dir", c.state_dir);
   r.scalar("threads", c.threads);
@@ -70,6 +83,7 @@ Config load_config(const std::string& path) {
   r.scalar("executor", c.executor);
   if (YAML::Node sl = r.get("slurm")) {
     if (!sl.IsMap()) r.fail("slurm", sl.Mark(), "expected a mapping");
+    r.unique_keys(sl, "slurm.");
     for (const auto& kv : sl) {
       const std::string k = kv.first.as<std::string>();
       const YAML::Node v = kv.second;
@@ -139,6 +153,7 @@ Config load_config(const std::string& path) {
   if (YAML::Node users = r.get("tcp_users")) {
     // user: TOKEN  or  user: {token: T | token_file: PATH, role: user | worker}
     if (!users.IsMap()) r.fail("tcp_users", users.Mark(), "expected a mapping of user to token");
+    r.unique_keys(users, "tcp_users.");
     for (const auto& kv : users) {
       const std::string user = kv.first.as<std::string>();
       std::string token;

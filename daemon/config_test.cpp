@@ -82,5 +82,16 @@ TEST(Config, SlurmWorkerScriptCarriesNoToken) {
   EXPECT_EQ(script.find("farm-token"), std::string::npos);
 }
 
+TEST(Config, AKeyGivenTwiceIsRefusedWithBothLines) {
+  // yaml-cpp keeps both and reads the first: an override appended to the file went unnoticed.
+  const std::string top = error_of("max_running: 1\nthreads: 2\nmax_running: 4\n");
+  EXPECT_NE(top.find(":3: max_running: given twice (first at line 1)"), std::string::npos) << top;
+  const std::string users = error_of("tcp_users:\n  alice: aaaaaaaaaaaaaaaaaaaa\n  alice: bbbbbbbbbbbbbbbbbbbb\n");
+  EXPECT_NE(users.find(":3: tcp_users.alice: given twice (first at line 2)"), std::string::npos) << users;
+  const std::string slurm = error_of("slurm:\n  threads: 2\n  threads: 8\n");
+  EXPECT_NE(slurm.find(":3: slurm.threads: given twice (first at line 2)"), std::string::npos) << slurm;
+  EXPECT_EQ(load("max_running: 3\n").max_running, 3);
+}
+
 }  // namespace
 }  // namespace omega::daemon

@@ -38,9 +38,12 @@ class Daemon:
         self.state_dir = state_dir or os.path.join(workdir, "state")
         self.sock = os.path.join(workdir, name + ".sock")
         self.config_path = os.path.join(workdir, name + ".yaml")
-        base = "checkpoint_interval_s: 0\ndrain_timeout_s: 20\nlog_level: debug\n"
+        # The test's own top-level keys replace these defaults: omegad refuses a key given twice
+        # (it used to read the first, so e.g. bench_daemon.py's checkpoint_interval_s was ignored).
+        own = {line.split(":", 1)[0] for line in config.splitlines() if line[:1] not in ("", " ", "-", "#")}
+        base = {"checkpoint_interval_s": "0", "drain_timeout_s": "20", "log_level": "debug"}
         with open(self.config_path, "w") as f:
-            f.write(base + config)
+            f.write("".join(f"{k}: {v}\n" for k, v in base.items() if k not in own) + config)
         self.threads = threads
         self.tcp_port = tcp_port  # 0: any free port; a fixed one lets clients reconnect after a restart
         self.listen = list(listen)  # more --listen addresses (e.g. a veth's, for workers in a netns)
