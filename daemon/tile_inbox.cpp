@@ -22,7 +22,7 @@ void TileInbox::drain() {
   std::vector<TileUpdate> batch;
   {
     std::lock_guard lock(mutex_);
-    batch.swap(pending_);
+    batch = take_locked();
   }
   if (!batch.empty()) deliver_(std::move(batch));
 }
@@ -31,7 +31,7 @@ void TileInbox::on_due() {
   std::vector<TileUpdate> batch;
   {
     std::lock_guard lock(mutex_);
-    batch.swap(pending_);
+    batch = take_locked();
     // Nothing came since the last batch: quiet again, the next tile goes at once.
     if (batch.empty()) {
       due_ = false;

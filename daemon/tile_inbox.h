@@ -2,9 +2,9 @@
 // Tiles the render threads finish, on their way to the loop, which sends them to the watchers.
 //
 // One post per tile woke the loop once per tile, and on a machine whose cores all render, each
-// wake-up takes a core from a render thread: a watched 256x256 job (448 tiles) cost 2.5% more
-// CPU with one watcher than unwatched, of which encoding the tiles was a fifth. So tiles go in
-// batches: the first tile after a quiet spell, and a job's first streamed tile (TileUpdate::
+// wake-up takes a core from a render thread (a watched 256x256 job of 448 tiles: 544 posts and
+// 532 epoll_wait returns; batched, 35 and 117; docs/daemon.md has the CPU figures). So tiles go
+// in batches: the first tile after a quiet spell, and a job's first streamed tile (TileUpdate::
 // first), at once (a preview's first tile waits for nothing); later ones together, one batch per
 // `batch_s` (a timer on the loop, while tiles keep coming). A tile is at most batch_s late.
 //
@@ -13,6 +13,7 @@
 // or post left when the loop stops is dropped with it, unrun.
 #include <functional>
 #include <mutex>
+#include <utility>
 #include <vector>
 
 #include "daemon/event_loop.h"
@@ -37,6 +38,7 @@ class TileInbox {
 
  private:
   void on_due();  // loop thread: a batch is due (the first tile's post, or the timer)
+  std::vector<TileUpdate> take_locked() { return std::exchange(pending_, {}); }  // holds mutex_
 
   EventLoop& loop_;
   const double batch_s_;
