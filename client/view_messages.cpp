@@ -227,20 +227,39 @@ bool is_loopback_host(std::string_view host) {
     return inet_pton(AF_INET, h.c_str(), &a) == 1 && (ntohl(a.s_addr) >> 24) == 127;
 }
 
+namespace {
+// A Host header's port: 1-5 digits, at most 65535 (RFC 7230 allows digits only).
+bool valid_port(std::string_view p) {
+    if (p.empty() || p.size() > 5) return false;
+    unsigned v = 0;
+    for (char c : p) {
+        if (c < '0' || c > '9') return false;
+        v = v * 10 + unsigned(c - '0');
+    }
+    return v <= 65535;
+}
+}  // namespace
+
 bool websocket_upgrade_allowed(const char* host, const char* origin) {
     if (!host) return false;
     const std::string_view h(host);
-    std::string_view name;  // the host part: "[v6]:port", "[v6]", "name:port" or "name"
+    // "[v6]:port", "[v6]", "name:port" or "name"; brackets hold only an IPv6 literal, so
+    // "[localhost]" or "[127.0.0.1]" (which no browser sends) are refused, as is any port that is
+    // not a number: the check accepts what a browser at the page's own address sends, nothing else.
+    std::string_view name, rest;
     if (!h.empty() && h.front() == '[') {
         const auto e = h.find(']');
         if (e == std::string_view::npos) return false;
         name = h.substr(1, e - 1);
-        const auto rest = h.substr(e + 1);
-        if (!rest.empty() && rest.front() != ':') return false;
+        rest = h.substr(e + 1);
+        if (name != "::1") return false;
     } else {
-        name = h.substr(0, h.find(':'));
+        const auto c = h.find(':');
+        name = h.substr(0, c);
+        rest = c == std::string_view::npos ? std::string_view() : h.substr(c);
+        if (name == "::1" || !is_loopback_host(name)) return false;
     }
-    if (!is_loopback_host(name)) return false;
+    if (!rest.empty() && (rest.front() != ':' || !valid_port(rest.substr(1)))) return false;
     return !origin || std::string_view(origin) == "http://" + std::string(h);
 }
 

@@ -176,6 +176,16 @@ TEST(ViewMessages, WebSocketUpgradeOnlyFromThePageOnLoopback) {
     EXPECT_FALSE(websocket_upgrade_allowed("[::1", nullptr));
     EXPECT_FALSE(websocket_upgrade_allowed("[::1]x", nullptr));
     EXPECT_FALSE(websocket_upgrade_allowed("", nullptr));
+    // Found by fuzz_view_messages: brackets around a name, and a port that is not a number.
+    EXPECT_FALSE(websocket_upgrade_allowed("[localhost]:81", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("[127.0.0.1]", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("localhost:81\xef\xbb\xbf" "81", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("localhost:", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("localhost:65536", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("127.0.0.1:7180:1", nullptr));
+    EXPECT_FALSE(websocket_upgrade_allowed("::1", nullptr));  // unbracketed v6 has no port syntax
+    EXPECT_TRUE(websocket_upgrade_allowed("localhost:65535", nullptr));
+    EXPECT_TRUE(websocket_upgrade_allowed("[::1]", "http://[::1]"));
     EXPECT_TRUE(is_loopback_host("::1"));
     EXPECT_FALSE(is_loopback_host("0.0.0.0"));
 }
