@@ -4,6 +4,9 @@
 // Embree's raw rate for incoherent rays on the same BVH at the same thread count, all in the same
 // run, and the rate of a bare one-ray-at-a-time loop on the same BVH (the ceiling of that design),
 // with what batching 8 paths' rays into Embree packets would gain on that loop and on raw rays.
+// Last, for each integrator, the speedup on 2 to 16 threads that its schedule alone allows
+// (barriers, imbalance, serial parts; integrator/schedule_probe.h), recorded on one thread, next
+// to the speedup measured here: the figure issue 12 asks for on machines this one cannot show.
 // Every figure is the median of REPEATS (default 3) measurements, each renderer run alternating
 // with an Embree run; a ratio is the median of those pairs' ratios, with their range beside it,
 // so one disturbed run on a shared machine neither moves the figure nor goes unseen.
@@ -44,6 +47,20 @@ Rate render_rate(const Scene& scene, int threads, long long spp) {
     RenderSession session(scene, rs);
     PassReport r = session.run();
     return {r.samples_per_s, r.rays_per_s, r.elapsed_s};
+}
+
+// A one-thread render that records its parallel regions and tasks (integrator/schedule_probe.h),
+// for the speedup its schedule allows on more threads than this machine has.
+void record_schedule(const Scene& scene, long long spp, ScheduleProbe& probe) {
+    RenderSettings rs;
+    rs.threads = 1;
+    rs.halt.spp = spp;
+    rs.integrator = scene.desc().integrator;
+    RenderSession session(scene, rs);
+    session.set_schedule_probe(&probe);
+    probe.start();
+    session.run();
+    probe.stop();
 }
 
 // An Embree ray from o along d over [0, tfar), as the renderer fills one (scene.cpp).
@@ -380,6 +397,49 @@ int main(int argc, char** argv) {
         const double own = ns(p.rays_per_s.median) - ns(bare), allowed = ns(p.embree.median) / target - ns(bare);
         fmt::print("{:>10} {:>8.2f} {:>12.0f} {:>14.0f} {:>14.0f} {:>11.0f}%\n", integrator_name(t), target,
                    ns(p.rays_per_s.median), own, allowed, own > allowed ? 100.0 * (1.0 - allowed / own) : 0.0);
+    }
+
+    // The schedule model: what each integrator's parallel structure allows on N threads, from a
+    // one-thread record, beside the speedup measured on this machine's threads (same spp).
+    fmt::print("schedule model (1-thread record replayed on N workers; an upper bound: no shared caches or memory "
+               "bandwidth), medians of {}\n", repeats);
+    fmt::print("{:>10} {:>8} {:>10} {:>10} {:>12}", "integrator", "spp", "serial %", "idle % @16", "measured @" + std::to_string(max_threads));
+    const std::vector<int> model_counts = {2, 4, 8, 16};
+    for (int n : model_counts) fmt::print(" {:>9}", fmt::format("model @{}", n));
+    fmt::print("\n");
+    for (IntegratorType t : {IntegratorType::Path, IntegratorType::Light, IntegratorType::Bdpt}) {
+        SceneDesc d = desc;
+        d.integrator.type = t;
+        auto sc = Scene::build(d);
+        // Half the spp for the splatting integrators: one batch per sample index, and enough
+        // batches that one disturbed task does not decide a barrier.
+        const long long n_spp = t == IntegratorType::Path ? spp : std::max(1LL, spp / 2);
+        std::vector<double> serial, idle, measured, ideal;
+        std::vector<std::vector<double>> model(model_counts.size());
+        std::vector<std::pair<std::string, std::vector<double>>> idle_by_kind;  // % of 16 x the time
+        for (int k = 0; k < repeats; ++k) {
+            ScheduleProbe probe;
+            record_schedule(*sc, n_spp, probe);
+            const double t1 = probe.predict(1).seconds;
+            serial.push_back(100.0 * probe.predict(1).serial_s / t1);
+            const auto p16 = probe.predict(16);
+            idle.push_back(100.0 * p16.idle_s / (16.0 * p16.seconds));
+            ideal.push_back(t1 / probe.predict(16, true).seconds);
+            for (const auto& kind : p16.kinds) {
+                auto it = std::find_if(idle_by_kind.begin(), idle_by_kind.end(), [&](const auto& e) { return e.first == kind.kind; });
+                if (it == idle_by_kind.end()) it = idle_by_kind.insert(idle_by_kind.end(), {kind.kind, {}});
+                it->second.push_back(100.0 * kind.idle_s / (16.0 * p16.seconds));
+            }
+            for (size_t i = 0; i < model_counts.size(); ++i) model[i].push_back(t1 / probe.predict(model_counts[i]).seconds);
+            if (max_threads > 1)
+                measured.push_back(render_rate(*sc, max_threads, n_spp).samples_per_s / render_rate(*sc, 1, n_spp).samples_per_s);
+        }
+        fmt::print("{:>10} {:>8} {:>10.2f} {:>10.2f} {:>12}", integrator_name(t), n_spp, spread(serial).median,
+                   spread(idle).median, measured.empty() ? std::string("-") : fmt::format("{:.2f}", spread(measured).median));
+        for (auto& m : model) fmt::print(" {:>9.2f}", spread(m).median);
+        std::string kinds;
+        for (const auto& [kind, v] : idle_by_kind) kinds += fmt::format(" {} {:.1f}%", kind, spread(v).median);
+        fmt::print("   each region's tasks longest first @16: {:.2f}; idle @16 by region:{}\n", spread(ideal).median, kinds);
     }
     return 0;
 }

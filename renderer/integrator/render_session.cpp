@@ -9,6 +9,7 @@
 #include <span>
 
 #include "film/filter.h"
+#include "integrator/ordered_dispatch.h"
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -28,6 +29,12 @@ constexpr size_t kWavePixels = size_t(1) << 18;  // variance estimates below thi
 
 PathTracerSettings tracer_settings(const IntegratorDesc& d) {
     return {d.max_depth, d.rr_depth, d.light_sampling, d.mirror_connector};
+}
+
+// Seconds of work since t0, for ordering tiles (always the real clock: RenderSettings::clock is
+// what time limits read, and tests that inject it count its calls).
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace
@@ -66,6 +73,13 @@ RenderSession::RenderSession(const Scene& scene, const RenderSettings& settings)
             strategies_ = std::make_unique<StrategyImages>(film_.crop(), settings.strategy_images_max_k,
                                                            bdpt_->plan().t0 && bdpt_->strategies().allows(2, 0));
     }
+}
+
+void RenderSession::set_schedule_probe(ScheduleProbe* p) {
+    if (p && resolve_threads(settings_.threads) != 1)
+        throw std::logic_error("RenderSession::set_schedule_probe: the session must run on one thread");
+    probe_ = p;
+    if (bands_) bands_->set_probe(p);
 }
 
 bool RenderSession::tile_may_start() {
@@ -126,6 +140,8 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
     // a large film (70% of the merge's time went to that one load).
     const size_t tile_area = tiles.empty() ? 1 : size_t(std::max<long long>(1, tiles.front().area()));
     const size_t wave = std::max(size_t(4 * arena.max_concurrency()), kWavePixels / tile_area);
+    tile_costs_.resize(tiles.size());
+    const std::vector<uint32_t>& tile_order = tile_costs_.order();
     for (size_t w0 = 0; w0 < tiles.size() && !aborted(); w0 += wave) {
         const size_t w1 = std::min(tiles.size(), w0 + wave);
         // Capacity kept from batch to batch: the tiles' splat lists are rebuilt every batch.
@@ -133,64 +149,66 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
         tile_splats.resize(w1 - w0);
         for (auto& t : tile_splats) t.clear();
         std::vector<std::vector<StrategyContribution>> tile_strategy_splats(strategies_ ? w1 - w0 : 0);
-        arena.execute([&] {
-            tbb::parallel_for(
-                tbb::blocked_range<size_t>(w0, w1, 1),
-                [&](const tbb::blocked_range<size_t>& range) {
-                    TracerStats& st = stats_.local();
-                    BdptScratch& scratch = scratch_.local();
-                    std::vector<Splat>& out = tile_raw_splats_.local();
-                    std::vector<StrategyContribution>* per = strategies_ ? &sample_strategies_.local() : nullptr;
-                    for (size_t ti = range.begin(); ti != range.end(); ++ti) {
-                        bool ran_tile = false;
-                        run_tile([&] {
-                            if (!tile_may_start()) return;
-                            ran_tile = true;
-                            ran[ti] = 1;
-                            const Rect& tile = tiles[ti];
-                            out.clear();
-                            for (int y = tile.y0; y < tile.y1; ++y)
-                                for (int x = tile.x0; x < tile.x1; ++x) {
-                                    uint64_t pixel = uint64_t(y) * width + uint64_t(x);
-                                    Sampler sampler =
-                                        Sampler::make(settings_.integrator.sampler, settings_.seed, pixel, uint64_t(i));
-                                    sampler.start_dimension(dims::kFilm);
-                                    Vec2 u_film = sampler.next_2d_if(camera_ray);
-                                    sampler.start_dimension(dims::kLens);
-                                    Vec2 u_lens = sampler.next_2d_if(lens && camera_ray);
-                                    Ray ray = camera_ray ? sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens) : Ray{};
-                                    // The sample appends its splats to the tile's list directly;
-                                    // a sample that is dropped takes them back out.
-                                    const size_t first_splat = out.size();
-                                    if (per) per->clear();
-                                    Rgb L = bdpt_->sample(ray, sampler, st, scratch, out, per);
-                                    ++st.samples;
-                                    const std::span<const Splat> mine(out.data() + first_splat, out.size() - first_splat);
-                                    bool finite = is_finite(L);
-                                    for (const Splat& sp : mine) finite = finite && is_finite(sp.value);
-                                    if (!finite) {
-                                        ++st.nonfinite;  // the whole sample is dropped, splats included
-                                        out.resize(first_splat);
-                                        continue;
-                                    }
-                                    sums[index(x, y)] += Vec3d(L);
-                                    if (aovs)
-                                        for (size_t a = 0; a < aovs->size(); ++a)
-                                            aovs->add_camera(a, index(x, y), scratch.aov_camera[a]);
-                                    if (breakdown_) breakdown_->add_splatting_sample(x, y, scratch, mine, filter);
-                                    if (per)
-                                        for (const auto& c : *per) {
-                                            if (c.splat) tile_strategy_splats[ti - w0].push_back(c);
-                                            else strategies_->add_camera(x, y, c);
-                                        }
-                                }
-                            bands_->bucket(out, tile_splats[ti - w0]);
-                        });
-                        if (!ran_tile) return;
+        if (probe_) probe_->region_begin("tiles");
+        // This wave's tiles, longest first by their cost in the last batch.
+        wave_order_.clear();
+        for (uint32_t ti : tile_order)
+            if (ti >= w0 && ti < w1) wave_order_.push_back(ti);
+        for_each_ordered(arena, wave_order_, [&](uint32_t ti) {
+            TracerStats& st = stats_.local();
+            BdptScratch& scratch = scratch_.local();
+            std::vector<Splat>& out = tile_raw_splats_.local();
+            std::vector<StrategyContribution>* per = strategies_ ? &sample_strategies_.local() : nullptr;
+            bool ran_tile = false;
+            ScheduleProbe::TaskTimer timer(probe_);
+            run_tile([&] {
+                if (!tile_may_start()) return;
+                const auto t0 = std::chrono::steady_clock::now();
+                ran_tile = true;
+                ran[ti] = 1;
+                const Rect& tile = tiles[ti];
+                out.clear();
+                for (int y = tile.y0; y < tile.y1; ++y)
+                    for (int x = tile.x0; x < tile.x1; ++x) {
+                        uint64_t pixel = uint64_t(y) * width + uint64_t(x);
+                        Sampler sampler =
+                            Sampler::make(settings_.integrator.sampler, settings_.seed, pixel, uint64_t(i));
+                        sampler.start_dimension(dims::kFilm);
+                        Vec2 u_film = sampler.next_2d_if(camera_ray);
+                        sampler.start_dimension(dims::kLens);
+                        Vec2 u_lens = sampler.next_2d_if(lens && camera_ray);
+                        Ray ray = camera_ray ? sensor.generate_ray(film_.sample_position(x, y, u_film), u_lens) : Ray{};
+                        // The sample appends its splats to the tile's list directly;
+                        // a sample that is dropped takes them back out.
+                        const size_t first_splat = out.size();
+                        if (per) per->clear();
+                        Rgb L = bdpt_->sample(ray, sampler, st, scratch, out, per);
+                        ++st.samples;
+                        const std::span<const Splat> mine(out.data() + first_splat, out.size() - first_splat);
+                        bool finite = is_finite(L);
+                        for (const Splat& sp : mine) finite = finite && is_finite(sp.value);
+                        if (!finite) {
+                            ++st.nonfinite;  // the whole sample is dropped, splats included
+                            out.resize(first_splat);
+                            continue;
+                        }
+                        sums[index(x, y)] += Vec3d(L);
+                        if (aovs)
+                            for (size_t a = 0; a < aovs->size(); ++a)
+                                aovs->add_camera(a, index(x, y), scratch.aov_camera[a]);
+                        if (breakdown_) breakdown_->add_splatting_sample(x, y, scratch, mine, filter);
+                        if (per)
+                            for (const auto& c : *per) {
+                                if (c.splat) tile_strategy_splats[ti - w0].push_back(c);
+                                else strategies_->add_camera(x, y, c);
+                            }
                     }
-                },
-                tbb::simple_partitioner());
+                bands_->bucket(out, tile_splats[ti - w0]);
+                tile_costs_.record(ti, seconds_since(t0));
+            });
+            return ran_tile;
         });
+        if (probe_) probe_->region_end();
         if (aborted()) return;
         for (const auto& list : tile_strategy_splats)
             for (const auto& c : list) strategies_->add_splat(c, filter, inv_light_paths_per_sample);
@@ -310,24 +328,23 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
         if (bdpt_) {
             complete = render_pass_splatting(arena, tiles, s0, s1);
         } else {
-            arena.execute([&] {
-                tbb::parallel_for(
-                    tbb::blocked_range<size_t>(0, tiles.size(), 1),
-                    [&](const tbb::blocked_range<size_t>& r) {
-                        TracerStats& st = stats.local();
-                        for (size_t t = r.begin(); t != r.end(); ++t) {
-                            bool ran = false;
-                            run_tile([&] {
-                                if (!tile_may_start()) return;
-                                render_tile(tiles[t], s0, s1, st);
-                                ran = true;
-                                if (on_tile_ && !aborted()) on_tile_(tiles[t], s1);
-                            });
-                            if (!ran) return;
-                        }
-                    },
-                    tbb::simple_partitioner());
+            if (probe_) probe_->region_begin("tiles");
+            tile_costs_.resize(tiles.size());
+            for_each_ordered(arena, tile_costs_.order(), [&](uint32_t t) {
+                TracerStats& st = stats.local();
+                ScheduleProbe::TaskTimer timer(probe_);
+                bool ran = false;
+                run_tile([&] {
+                    if (!tile_may_start()) return;
+                    const auto t0 = std::chrono::steady_clock::now();
+                    render_tile(tiles[t], s0, s1, st);
+                    tile_costs_.record(t, seconds_since(t0) / double(s1 - s0));
+                    ran = true;
+                    if (on_tile_ && !aborted()) on_tile_(tiles[t], s1);
+                });
+                return ran;
             });
+            if (probe_) probe_->region_end();
         }
         if (aborted()) break;  // a partial pass is not reported as complete
 

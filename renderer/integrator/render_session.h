@@ -19,7 +19,9 @@
 #include "integrator/aov_images.h"
 #include "integrator/bdpt_tracer.h"
 #include "integrator/breakdown_collector.h"
+#include "integrator/ordered_dispatch.h"
 #include "integrator/path_tracer.h"
+#include "integrator/schedule_probe.h"
 #include "integrator/splat_bands.h"
 #include "integrator/strategy_images.h"
 #include "scene/scene.h"
@@ -86,6 +88,12 @@ public:
     using TileRunner = std::function<void(const std::function<void()>& work)>;
     void set_tile_runner(TileRunner r) { tile_runner_ = std::move(r); }
 
+    // Bench only (bench/throughput): records this run's parallel regions and the duration of
+    // each task, to predict its speedup on more cores (integrator/schedule_probe.h). The record
+    // means something only when tasks do not overlap: throws std::logic_error unless the session
+    // runs on one thread. The caller brackets run() with p->start() and p->stop(). Set before run().
+    void set_schedule_probe(ScheduleProbe* p);
+
     const Film& film() const { return film_; }
     Film& film() { return film_; }
     const RenderSettings& settings() const { return settings_; }
@@ -127,6 +135,10 @@ private:
     tbb::enumerable_thread_specific<std::vector<Splat>> tile_raw_splats_;  // one tile's, before bucketing (its samples append to it)
     std::unique_ptr<SplatBands> bands_;  // light tracing and BDPT: the crop's row bands
     std::vector<BandedSplats> banded_tiles_;  // one wave's splats by tile and band (driver thread sizes it)
+    // Each tile's cost in its last pass or batch (workers record their own tiles), so the next
+    // one starts the longest first; wave_order_ is a wave's share of that order (driver thread).
+    LongestFirst tile_costs_;
+    std::vector<uint32_t> wave_order_;
     // Crop-sized, one batch's camera estimates and light-path splats (allocated and cleared by
     // the driver thread, cleared band by band in parallel). Zeroed pages: a value-initialised
     // vector was written whole by the driver thread alone, every page a fault, before the first
@@ -136,6 +148,7 @@ private:
     std::atomic<bool> aborted_{false};
     TileFn on_tile_;
     TileRunner tile_runner_;
+    ScheduleProbe* probe_ = nullptr;  // bench only, one thread: see set_schedule_probe
     void run_tile(const std::function<void()>& work) const {
         if (tile_runner_) tile_runner_(work);
         else work();

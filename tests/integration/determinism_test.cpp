@@ -1,7 +1,6 @@
 // The image is a function of (scene, seed, spp) alone: thread count and tiling never change a bit.
 #include <gtest/gtest.h>
 
-#include <cstring>
 
 #include "render_harness.h"
 
@@ -10,25 +9,13 @@ namespace {
 
 SceneDesc small_scene() { return test::metal_cube_scene(40, 30); }
 
-bool bit_identical(const Film& a, const Film& b) {
-    Rect c = a.crop();
-    for (int y = c.y0; y < c.y1; ++y)
-        for (int x = c.x0; x < c.x1; ++x) {
-            PixelStats pa = a.pixel(x, y), pb = b.pixel(x, y);
-            if (pa.n != pb.n || std::memcmp(&pa.mean, &pb.mean, sizeof pa.mean) != 0 ||
-                std::memcmp(&pa.var_of_mean, &pb.var_of_mean, sizeof pa.var_of_mean) != 0)
-                return false;
-        }
-    return true;
-}
-
 TEST(Determinism, SameImageForAnyThreadCountAndTileSize) {
     SceneDesc d = small_scene();
     auto one = test::render(d, 8, 42, 1, 32);
     auto two = test::render(d, 8, 42, 2, 32);
     auto three_small_tiles = test::render(d, 8, 42, 3, 7);
-    EXPECT_TRUE(bit_identical(one.film(), two.film()));
-    EXPECT_TRUE(bit_identical(one.film(), three_small_tiles.film()));
+    EXPECT_TRUE(test::same_bits(one.film(), two.film()));
+    EXPECT_TRUE(test::same_bits(one.film(), three_small_tiles.film()));
     EXPECT_GT(one.report.error.image_mean, 0.0);
 }
 
@@ -36,7 +23,7 @@ TEST(Determinism, SeedChangesTheImage) {
     SceneDesc d = small_scene();
     auto a = test::render(d, 4, 1, 2);
     auto b = test::render(d, 4, 2, 2);
-    EXPECT_FALSE(bit_identical(a.film(), b.film()));
+    EXPECT_FALSE(test::same_bits(a.film(), b.film()));
     // ...but only by noise.
     auto z = test::z_between(a.film(), b.film(), 10);
     EXPECT_LT(z.max_abs_z, test::z_threshold(z.blocks));
@@ -66,7 +53,7 @@ TEST(Determinism, ResumedRangesMergeExactly) {
             RenderSession second(*scene, rs);
             second.film() = Film::deserialize(d.sensor.film, first.film().serialize());  // as a checkpoint does
             second.run();
-            EXPECT_TRUE(bit_identical(whole.film(), second.film())) << integrator_name(type) << " " << sampler_name(sampler);
+            EXPECT_TRUE(test::same_bits(whole.film(), second.film())) << integrator_name(type) << " " << sampler_name(sampler);
             EXPECT_GT(whole.film().pixel(20, 15).var_of_mean.x, 0.0) << integrator_name(type);
         }
     }
@@ -89,8 +76,8 @@ TEST(Determinism, SplattingIntegratorsAreBitIdenticalAcrossThreads) {
         auto one = test::render(d, 6, 42, 1, 32);
         auto two = test::render(d, 6, 42, 2, 32);
         auto three = test::render(d, 6, 42, 3, 32);
-        EXPECT_TRUE(bit_identical(one.film(), two.film())) << int(type);
-        EXPECT_TRUE(bit_identical(one.film(), three.film())) << int(type);
+        EXPECT_TRUE(test::same_bits(one.film(), two.film())) << int(type);
+        EXPECT_TRUE(test::same_bits(one.film(), three.film())) << int(type);
         EXPECT_GT(one.report.error.image_mean, 0.0);
     }
 }

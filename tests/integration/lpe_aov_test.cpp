@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 
 #include "render_harness.h"
 
@@ -41,18 +40,6 @@ SceneDesc all_classes_scene() {
 }
 
 const Film& aov(const test::RenderResult& r, size_t i) { return r.session->aovs()->films()[i].film; }
-
-bool same_state(const Film& a, const Film& b) {
-    const Rect c = a.crop();
-    for (int y = c.y0; y < c.y1; ++y)
-        for (int x = c.x0; x < c.x1; ++x) {
-            const PixelState sa = a.state(x, y), sb = b.state(x, y);
-            if (sa.n != sb.n || std::memcmp(&sa.w, &sb.w, sizeof sa.w) != 0 ||
-                std::memcmp(sa.mean, sb.mean, sizeof sa.mean) != 0 || std::memcmp(sa.m2, sb.m2, sizeof sa.m2) != 0)
-                return false;
-        }
-    return true;
-}
 
 // Renders with `aovs` whose first `parts` entries partition path space, for every integrator,
 // and checks that they sum to the beauty within float rounding, and that each is lit.
@@ -118,9 +105,9 @@ TEST(LpeAov, BeautyUnchangedAndDeterministic) {
         auto a = test::render(plain, 4, 3, 1, 8);
         auto b = test::render(with, 4, 3, 2, 8);
         auto c = test::render(with, 4, 3, 1, 8);
-        EXPECT_TRUE(same_state(a.film(), b.film())) << name_of(t) << ": AOVs changed the beauty";
+        EXPECT_TRUE(test::same_bits(a.film(), b.film())) << name_of(t) << ": AOVs changed the beauty";
         for (size_t i = 0; i < b.session->aovs()->size(); ++i)
-            EXPECT_TRUE(same_state(aov(b, i), aov(c, i))) << name_of(t) << " aov " << i << ": thread count changed it";
+            EXPECT_TRUE(test::same_bits(aov(b, i), aov(c, i))) << name_of(t) << " aov " << i << ": thread count changed it";
     }
 }
 
@@ -213,9 +200,9 @@ TEST(LpeAov, ResumeFromSerializedFilmsIsExact) {
         for (size_t i = 0; i < rest.aovs()->size(); ++i)
             rest.aovs()->films()[i].film = Film::deserialize(d.sensor.film, first.aovs()->films()[i].film.serialize());
         rest.run();
-        EXPECT_TRUE(same_state(whole.film(), rest.film())) << name_of(t);
+        EXPECT_TRUE(test::same_bits(whole.film(), rest.film())) << name_of(t);
         for (size_t i = 0; i < whole.aovs()->size(); ++i)
-            EXPECT_TRUE(same_state(whole.aovs()->films()[i].film, rest.aovs()->films()[i].film)) << name_of(t) << " " << i;
+            EXPECT_TRUE(test::same_bits(whole.aovs()->films()[i].film, rest.aovs()->films()[i].film)) << name_of(t) << " " << i;
     }
 }
 

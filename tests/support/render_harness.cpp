@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace omega::test {
 
@@ -175,6 +176,19 @@ double z_threshold(int n, double alpha) {
         else hi = mid;
     }
     return hi;
+}
+
+bool same_bits(const Film& a, const Film& b) {
+    const Rect c = a.crop(), d = b.crop();
+    if (c.x0 != d.x0 || c.y0 != d.y0 || c.x1 != d.x1 || c.y1 != d.y1) return false;
+    for (int y = c.y0; y < c.y1; ++y)
+        for (int x = c.x0; x < c.x1; ++x) {
+            const PixelState sa = a.state(x, y), sb = b.state(x, y);
+            if (sa.n != sb.n || std::memcmp(&sa.w, &sb.w, sizeof sa.w) != 0 ||
+                std::memcmp(sa.mean, sb.mean, sizeof sa.mean) != 0 || std::memcmp(sa.m2, sb.m2, sizeof sa.m2) != 0)
+                return false;
+        }
+    return true;
 }
 
 }  // namespace omega::test

@@ -28,6 +28,10 @@ BreakdownReport breakdown(const RenderResult& r);
 // One breakdown row by kind and name ("class", "L D E"; "length", "k=2"); null if absent.
 const BreakdownRow* breakdown_row(const BreakdownReport& r, const std::string& kind, const std::string& name);
 
+// Whether two films hold the same accumulator state, bit for bit: per pixel the count, the weight,
+// the mean and M2 (Film::state), so equal images with different variance also differ.
+bool same_bits(const Film& a, const Film& b);
+
 // A minimal valid scene: a perspective camera at the origin looking along +z, film w x h, box filter.
 SceneDesc empty_scene(int w, int h);
 MaterialDesc diffuse(const std::string& name, Rgb reflectance);
