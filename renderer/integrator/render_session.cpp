@@ -160,7 +160,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
             std::vector<Splat>& out = tile_raw_splats_.local();
             std::vector<StrategyContribution>* per = strategies_ ? &sample_strategies_.local() : nullptr;
             bool ran_tile = false;
-            ScheduleProbe::TaskTimer timer(probe_);
+            ScheduleProbe::TaskTimer timer(probe_, ti);
             run_tile([&] {
                 if (!tile_may_start()) return;
                 const auto t0 = std::chrono::steady_clock::now();
@@ -332,7 +332,7 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
             tile_costs_.resize(tiles.size());
             for_each_ordered(arena, tile_costs_.order(), [&](uint32_t t) {
                 TracerStats& st = stats.local();
-                ScheduleProbe::TaskTimer timer(probe_);
+                ScheduleProbe::TaskTimer timer(probe_, t);
                 bool ran = false;
                 run_tile([&] {
                     if (!tile_may_start()) return;

@@ -32,6 +32,7 @@ void ScheduleProbe::region_begin(const char* kind) {
     r.serial_before = lap(mark_);
     regions_.push_back(std::move(r));
     tasks_.clear();
+    items_.clear();
 }
 
 void ScheduleProbe::region_end() {
@@ -41,7 +42,9 @@ void ScheduleProbe::region_end() {
     const double busy = std::accumulate(tasks_.begin(), tasks_.end(), 0.0);
     r.overhead = std::max(0.0, wall - busy);
     r.tasks = std::move(tasks_);
+    r.items = std::move(items_);
     tasks_.clear();
+    items_.clear();
 }
 
 void ScheduleProbe::stop() {
@@ -50,11 +53,15 @@ void ScheduleProbe::stop() {
     total_s_ = std::chrono::duration<double>(now - run_start_).count();
 }
 
-void ScheduleProbe::add_region(double serial_before, std::vector<double> tasks, const char* kind) {
+void ScheduleProbe::add_region(double serial_before, std::vector<double> tasks, const char* kind,
+                               std::vector<uint32_t> items) {
     Region r;
     r.kind = kind;
     r.serial_before = serial_before;
+    if (items.empty())
+        for (uint32_t i = 0; i < tasks.size(); ++i) items.push_back(i);
     r.tasks = std::move(tasks);
+    r.items = std::move(items);
     regions_.push_back(std::move(r));
 }
 
@@ -64,7 +71,7 @@ size_t ScheduleProbe::tasks() const {
     return n;
 }
 
-ScheduleProbe::Prediction ScheduleProbe::predict(int workers, bool longest_first) const {
+ScheduleProbe::Prediction ScheduleProbe::predict(int workers, Order order) const {
     const int n = std::max(1, workers);
     Prediction p;
     p.serial_s = tail_s_;
@@ -74,12 +81,14 @@ ScheduleProbe::Prediction ScheduleProbe::predict(int workers, bool longest_first
         std::priority_queue<double, std::vector<double>, std::greater<>> free_at;
         for (int k = 0; k < n; ++k) free_at.push(0.0);
         double busy = 0, makespan = 0;
-        std::vector<double> order;
-        if (longest_first) {
-            order = r.tasks;
-            std::sort(order.begin(), order.end(), std::greater<>());
-        }
-        for (double t : longest_first ? order : r.tasks) {
+        std::vector<size_t> idx(r.tasks.size());
+        std::iota(idx.begin(), idx.end(), size_t(0));
+        if (order == Order::ByItem)
+            std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return r.items[a] < r.items[b]; });
+        else if (order == Order::LongestFirst)
+            std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return r.tasks[a] > r.tasks[b]; });
+        for (size_t j : idx) {
+            const double t = r.tasks[j];
             const double start = free_at.top();
             free_at.pop();
             free_at.push(start + t);

@@ -15,6 +15,7 @@
 // Concurrency: every call comes from the session's one worker or its driver thread, never two
 // at once (a one-thread arena runs tasks on the calling thread).
 #include <chrono>
+#include <cstdint>
 #include <vector>
 
 namespace omega {
@@ -30,23 +31,27 @@ public:
     // what its tasks are (a string literal: "tiles", "bands", "merge"), for predict()'s breakdown.
     void region_begin(const char* kind);
     void region_end();
-    // One task of the open region took `seconds`.
-    void task(double seconds) { tasks_.push_back(seconds); }
+    // One task of the open region, work item `item` (a tile or band index), took `seconds`.
+    void task(double seconds, uint32_t item) {
+        tasks_.push_back(seconds);
+        items_.push_back(item);
+    }
 
     // Times one task of the open region from construction to destruction; a null probe: nothing.
     class TaskTimer {
     public:
-        explicit TaskTimer(ScheduleProbe* p) : p_(p) {
+        TaskTimer(ScheduleProbe* p, uint32_t item) : p_(p), item_(item) {
             if (p_) t0_ = Clock::now();
         }
         ~TaskTimer() {
-            if (p_) p_->task(std::chrono::duration<double>(Clock::now() - t0_).count());
+            if (p_) p_->task(std::chrono::duration<double>(Clock::now() - t0_).count(), item_);
         }
         TaskTimer(const TaskTimer&) = delete;
         TaskTimer& operator=(const TaskTimer&) = delete;
 
     private:
         ScheduleProbe* p_;
+        uint32_t item_;
         Clock::time_point t0_{};
     };
 
@@ -61,9 +66,11 @@ public:
         };
         std::vector<Kind> kinds;
     };
-    // longest_first: each region's tasks handed out longest first (what ordering by a known cost
-    // could reach) instead of in their recorded order.
-    Prediction predict(int workers, bool longest_first = false) const;
+    // The order each region's tasks are handed out in: as they ran, by item index (tiles top to
+    // bottom, what tbb::parallel_for's ranges start from), or longest first (what ordering by a
+    // known cost could reach).
+    enum class Order { AsRun, ByItem, LongestFirst };
+    Prediction predict(int workers, Order order = Order::AsRun) const;
 
     double recorded_seconds() const { return total_s_; }  // start() to stop()
     size_t regions() const { return regions_.size(); }
@@ -71,7 +78,9 @@ public:
 
     // Synthetic records (tests): a region of these task durations after `serial_before` seconds
     // of serial work, and serial work after the last region.
-    void add_region(double serial_before, std::vector<double> tasks, const char* kind = "tasks");
+    // Items default to 0, 1, 2, ... (the tasks' order).
+    void add_region(double serial_before, std::vector<double> tasks, const char* kind = "tasks",
+                    std::vector<uint32_t> items = {});
     void set_tail(double serial_after) { tail_s_ = serial_after; }
 
 private:
@@ -80,9 +89,11 @@ private:
         double serial_before = 0;  // since the last region ended (or the run started)
         double overhead = 0;       // inside the region, outside its tasks (serial)
         std::vector<double> tasks;
+        std::vector<uint32_t> items;  // each task's work item
     };
     std::vector<Region> regions_;
     std::vector<double> tasks_;    // the open region's
+    std::vector<uint32_t> items_;
     Clock::time_point run_start_{}, mark_{};
     double tail_s_ = 0, total_s_ = 0;
 };

@@ -64,7 +64,7 @@ public:
         arena.execute([&] {
             tbb::parallel_for(tbb::blocked_range<size_t>(0, bands(), 1), [&](const tbb::blocked_range<size_t>& r) {
                 for (size_t b = r.begin(); b != r.end(); ++b) {
-                    ScheduleProbe::TaskTimer timer(probe_);
+                    ScheduleProbe::TaskTimer timer(probe_, uint32_t(b));
                     fn(band(b));
                 }
             });
@@ -108,7 +108,7 @@ public:
         arena.execute([&] {
             tbb::parallel_for(tbb::blocked_range<size_t>(0, bands(), 1), [&](const tbb::blocked_range<size_t>& r) {
                 for (size_t b = r.begin(); b != r.end(); ++b) {
-                    ScheduleProbe::TaskTimer timer(probe_);
+                    ScheduleProbe::TaskTimer timer(probe_, uint32_t(b));
                     const Rect rows = band(b);
                     for (const BandedSplats& t : tiles) {
                         if (t.start.empty()) continue;  // a tile that did not run

@@ -30,6 +30,13 @@ TEST(ScheduleProbe, ReplaysTasksInOrderOnTheWorkerThatFreesFirst) {
     q.add_region(0, {1, 1, 1, 1, 4});
     EXPECT_DOUBLE_EQ(q.predict(2).seconds, 6.0);
     EXPECT_DOUBLE_EQ(q.predict(2).idle_s, 4.0);
+    // Replayed by item (index order) or longest first, the same record packs differently.
+    ScheduleProbe o;
+    o.add_region(0, {1, 1, 1, 1, 4}, "tiles", {1, 2, 3, 4, 0});
+    EXPECT_DOUBLE_EQ(o.predict(2).seconds, 6.0);
+    EXPECT_DOUBLE_EQ(o.predict(2, ScheduleProbe::Order::ByItem).seconds, 4.0);
+    EXPECT_DOUBLE_EQ(o.predict(2, ScheduleProbe::Order::LongestFirst).seconds, 4.0);
+    EXPECT_DOUBLE_EQ(q.predict(2, ScheduleProbe::Order::ByItem).seconds, 6.0);  // default items: as run
     // Regions end at a barrier: two regions of one task each do not overlap.
     ScheduleProbe r;
     r.add_region(0, {2}, "tiles");
