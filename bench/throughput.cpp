@@ -39,28 +39,20 @@ struct Rate {
     double samples_per_s, rays_per_s, seconds;
 };
 
-Rate render_rate(const Scene& scene, int threads, long long spp) {
+// With a probe (one thread only), the render also records its schedule (integrator/schedule_probe.h).
+Rate render_rate(const Scene& scene, int threads, long long spp, ScheduleProbe* probe = nullptr) {
     RenderSettings rs;
     rs.threads = threads;
     rs.halt.spp = spp;
     rs.integrator = scene.desc().integrator;
     RenderSession session(scene, rs);
+    if (probe) {
+        session.set_schedule_probe(probe);
+        probe->start();
+    }
     PassReport r = session.run();
+    if (probe) probe->stop();
     return {r.samples_per_s, r.rays_per_s, r.elapsed_s};
-}
-
-// A one-thread render that records its parallel regions and tasks (integrator/schedule_probe.h),
-// for the speedup its schedule allows on more threads than this machine has.
-void record_schedule(const Scene& scene, long long spp, ScheduleProbe& probe) {
-    RenderSettings rs;
-    rs.threads = 1;
-    rs.halt.spp = spp;
-    rs.integrator = scene.desc().integrator;
-    RenderSession session(scene, rs);
-    session.set_schedule_probe(&probe);
-    probe.start();
-    session.run();
-    probe.stop();
 }
 
 // An Embree ray from o along d over [0, tfar), as the renderer fills one (scene.cpp).
@@ -419,7 +411,7 @@ int main(int argc, char** argv) {
         std::vector<std::pair<std::string, std::vector<double>>> idle_by_kind;  // % of 16 x the time
         for (int k = 0; k < repeats; ++k) {
             ScheduleProbe probe;
-            record_schedule(*sc, n_spp, probe);
+            render_rate(*sc, 1, n_spp, &probe);
             const double t1 = probe.predict(1).seconds;
             serial.push_back(100.0 * probe.predict(1).serial_s / t1);
             const auto p16 = probe.predict(16);
