@@ -122,6 +122,8 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
         sums = ZeroedArray<Vec3d>(size_t(crop.area()));
         splats = ZeroedArray<Vec3d>(size_t(crop.area()));
     }
+    // Driver thread, nothing in flight: the bands this batch's splats go to.
+    bands_->relayout(probe_ ? ScheduleProbe::kLayoutWorkers : arena.max_concurrency());
     bands_->for_each_band(arena, [&](const Rect& rows) {
         const size_t a = index(rows.x0, rows.y0), b = a + size_t(rows.area());
         std::fill(sums.begin() + a, sums.begin() + b, Vec3d(0.0));

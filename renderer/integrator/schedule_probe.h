@@ -24,6 +24,10 @@ class ScheduleProbe {
 public:
     using Clock = std::chrono::steady_clock;
 
+    // A recorded session cuts its work as a run on this many workers would (SplatBands::relayout
+    // splits heavy bands per worker count): the largest count the bench predicts.
+    static constexpr int kLayoutWorkers = 16;
+
     // The recorded run starts now / ended now (the caller brackets RenderSession::run()).
     void start();
     void stop();

@@ -39,19 +39,50 @@ struct BandedSplats {
 class SplatBands {
 public:
     SplatBands(const Rect& crop, float filter_radius, int band_rows = kBandRows)
-        : crop_(crop), radius_(filter_radius), rows_(std::max(1, band_rows)),
-          bands_(size_t(std::max(1, (crop.height() + rows_ - 1) / rows_))) {
-        band_of_row_.resize(size_t(std::max(0, crop.height())));
-        for (size_t y = 0; y < band_of_row_.size(); ++y) band_of_row_[y] = int(y) / rows_;
+        : crop_(crop), radius_(filter_radius), rows_(std::max(1, band_rows)) {
+        for (int y = crop.y0; y < crop.y1; y += rows_) y0_.push_back(y);
+        y0_.push_back(std::max(crop.y0, crop.y1));
+        index_rows();
     }
 
-    size_t bands() const { return bands_; }
+    size_t bands() const { return y0_.size() - 1; }
     // Rows [y0, y1) of band b, as a rect of the crop.
     Rect band(size_t b) const {
         Rect r = crop_;
-        r.y0 = crop_.y0 + int(b) * rows_;
-        r.y1 = std::min(crop_.y1, r.y0 + rows_);
+        r.y0 = y0_[b];
+        r.y1 = y0_[b + 1];
         return r;
+    }
+
+    // Driver thread, between batches (no bucket() or merge() in flight): cuts the bands again
+    // for `workers`, from the splats the merges since the last call met in each band. A base
+    // band (band_rows rows) that held a share s of them is split into ceil(s * workers) equal
+    // parts, at most one a row, so no merge task is much more than one worker's share.
+    // Where the light is in view, every light path splats onto its few rows: in the Cornell box
+    // at 256x256 one 8-row band held 30% of the splats, and on 16 workers the merge waited for it
+    // (schedule model: 16% of the time idle). Cut finer everywhere, the merge copies and clips
+    // more splats (a tent footprint spans 2 rows; 1-row bands made light tracing 1.6% and 3.8%
+    // slower on one thread), so only heavy bands are cut, and on 2 workers none that holds
+    // under half. A splat counts once per band it reaches, so a split band's share grows a
+    // little; the cap of one row bounds that. Which band a pixel is in never changes the order
+    // of its additions, so the layout leaves the image's bits alone.
+    void relayout(int workers) {
+        uint64_t total = 0;
+        std::vector<uint64_t> base((size_t(crop_.height()) + size_t(rows_) - 1) / size_t(rows_), 0);
+        for (size_t b = 0; b < bands(); ++b) {
+            base[size_t(y0_[b] - crop_.y0) / size_t(rows_)] += merged_[b];
+            total += merged_[b];
+        }
+        if (total == 0) return;  // nothing merged (yet): keep the cut
+        y0_.clear();
+        for (size_t k = 0; k < base.size(); ++k) {
+            const int a = crop_.y0 + int(k) * rows_, rows = std::min(rows_, crop_.y1 - a);
+            const uint64_t parts = std::clamp<uint64_t>((base[k] * uint64_t(std::max(1, workers)) + total - 1) / total, 1,
+                                                        uint64_t(rows));
+            for (uint64_t p = 0; p < parts; ++p) y0_.push_back(a + int(uint64_t(rows) * p / parts));
+        }
+        y0_.push_back(crop_.y1);
+        index_rows();
     }
 
     // Each band a task of its own region (bench only; see RenderSession::set_schedule_probe).
@@ -99,7 +130,8 @@ public:
     // fn(splat, x, y, filter_weight) for every crop pixel each splat of `tiles` (bucketed by
     // bucket(), in merge order) reaches.
     template <class Fn>
-    void merge(tbb::task_arena& arena, const Filter& filter, const std::vector<BandedSplats>& tiles, Fn&& fn) const {
+    // Each band's task also counts its splats, for relayout().
+    void merge(tbb::task_arena& arena, const Filter& filter, const std::vector<BandedSplats>& tiles, Fn&& fn) {
         // In band order, not heaviest first (integrator/ordered_dispatch.h): where the light
         // itself is in view, every light path splats onto its few rows and that band is a
         // quarter of the merge, so on 16 workers the merge waits for it either way (schedule
@@ -112,6 +144,7 @@ public:
                     const Rect rows = band(b);
                     for (const BandedSplats& t : tiles) {
                         if (t.start.empty()) continue;  // a tile that did not run
+                        merged_[b] += t.start[b + 1] - t.start[b];
                         for (uint32_t k = t.start[b], e = t.start[b + 1]; k < e; ++k) {
                             const Splat& sp = t.by_band[k];
                             for_each_filter_pixel(filter, rows, sp.film, [&](int x, int y, double f) { fn(sp, x, y, f); });
@@ -137,8 +170,15 @@ private:
         if (ya > yb) return {1, 0};
         return {band_of_row_[size_t(ya - crop_.y0)], band_of_row_[size_t(yb - crop_.y0)]};
     }
-    size_t bands_;
-    std::vector<int> band_of_row_;  // crop row - crop_.y0 -> its band
+    void index_rows() {
+        band_of_row_.assign(size_t(std::max(0, crop_.height())), 0);
+        merged_.assign(bands(), 0);
+        for (size_t b = 0; b < bands(); ++b)
+            for (int y = y0_[b]; y < y0_[b + 1]; ++y) band_of_row_[size_t(y - crop_.y0)] = int(b);
+    }
+    std::vector<int> y0_;            // band b is rows [y0_[b], y0_[b + 1]); the last entry is crop_.y1
+    std::vector<int> band_of_row_;   // crop row - crop_.y0 -> its band
+    std::vector<uint64_t> merged_;   // splats merged per band since the last cut (band b's task writes b)
     ScheduleProbe* probe_ = nullptr;
 };
 

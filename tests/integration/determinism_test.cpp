@@ -78,6 +78,9 @@ TEST(Determinism, SplattingIntegratorsAreBitIdenticalAcrossThreads) {
         auto three = test::render(d, 6, 42, 3, 32);
         EXPECT_TRUE(test::same_bits(one.film(), two.film())) << int(type);
         EXPECT_TRUE(test::same_bits(one.film(), three.film())) << int(type);
+        // 16 workers cut the splat bands finer after the first batch (SplatBands::relayout).
+        auto sixteen = test::render(d, 6, 42, 16, 32);
+        EXPECT_TRUE(test::same_bits(one.film(), sixteen.film())) << int(type);
         EXPECT_GT(one.report.error.image_mean, 0.0);
     }
 }

@@ -3,6 +3,7 @@
 // tracing's and BDPT's images are bit-identical across thread counts only if it does.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "integrator/splat_bands.h"
@@ -73,6 +74,86 @@ TEST(SplatBands, BandsCoverTheCropOnce) {
         rows += r.height();
     }
     EXPECT_EQ(rows, crop.height());
+}
+
+
+// The bands a layout cuts the crop into: contiguous, in order, full width, each inside one base
+// band of `rows` rows.
+void expect_cover(const SplatBands& bands, const Rect& crop, int rows) {
+    int y = crop.y0;
+    for (size_t b = 0; b < bands.bands(); ++b) {
+        const Rect r = bands.band(b);
+        EXPECT_EQ(r.y0, y) << "band " << b;
+        EXPECT_GT(r.y1, r.y0) << "band " << b;
+        EXPECT_EQ(r.x0, crop.x0);
+        EXPECT_EQ(r.x1, crop.x1);
+        EXPECT_EQ((r.y0 - crop.y0) / rows, (r.y1 - 1 - crop.y0) / rows) << "band " << b << " crosses a base band";
+        y = r.y1;
+    }
+    EXPECT_EQ(y, crop.y1);
+}
+
+TEST(SplatBands, HeavyBandsAreCutPerWorkerAndTheMergeStaysBitIdentical) {
+    // Half the splats on rows 17-19 (the light in view), the rest anywhere.
+    const Rect crop{2, 1, 50, 49};
+    constexpr int kRows = 8;
+    auto tiles = random_splats(crop, 5);
+    Rng rng = Rng::for_sample(9, 0, 0);
+    for (auto& t : tiles)
+        for (size_t i = 0; i < t.size(); i += 2) t[i].film.y = 17.f + 3.f * rng.next_1d();
+    const Filter filter(FilterType::Tent, 1.f);
+    auto at = [&](int x, int y) { return size_t(y - crop.y0) * size_t(crop.width()) + size_t(x - crop.x0); };
+    std::vector<Vec3d> serial(size_t(crop.area()), Vec3d(0.0));
+    for (const auto& list : tiles)
+        for (const Splat& sp : list)
+            for_each_filter_pixel(filter, crop, sp.film, [&](int x, int y, double f) { serial[at(x, y)] += Vec3d(sp.value) * f; });
+    // What a merge on base bands counts: each splat once per base band its footprint reaches.
+    const size_t base = size_t(crop.height() + kRows - 1) / kRows;
+    std::vector<uint64_t> count(base, 0);
+    uint64_t total = 0;
+    for (const auto& list : tiles)
+        for (const Splat& sp : list) {
+            const auto [ya, yb] = filter_span(sp.film.y, filter.radius(), crop.y0, crop.y1);
+            if (ya > yb) continue;
+            for (int k = (ya - crop.y0) / kRows; k <= (yb - crop.y0) / kRows; ++k, ++total) ++count[size_t(k)];
+        }
+    tbb::task_arena arena(3);
+    auto merge_matches = [&](SplatBands& bands) {
+        std::vector<BandedSplats> bucketed(tiles.size());
+        for (size_t t = 0; t < tiles.size(); ++t) bands.bucket(tiles[t], bucketed[t]);
+        std::vector<Vec3d> banded(size_t(crop.area()), Vec3d(0.0));
+        bands.merge(arena, filter, bucketed,
+                    [&](const Splat& sp, int x, int y, double f) { banded[at(x, y)] += Vec3d(sp.value) * f; });
+        return std::memcmp(serial.data(), banded.data(), serial.size() * sizeof(Vec3d)) == 0;
+    };
+    for (int workers : {1, 2, 4, 16}) {
+        SCOPED_TRACE(workers);
+        SplatBands bands(crop, filter.radius(), kRows);
+        bands.relayout(workers);  // nothing merged yet: the base cut stays
+        ASSERT_EQ(bands.bands(), base);
+        ASSERT_TRUE(merge_matches(bands));
+        bands.relayout(workers);
+        expect_cover(bands, crop, kRows);
+        // Each base band in ceil(share * workers) parts, at most one a row.
+        std::vector<uint64_t> parts(base, 0);
+        for (size_t b = 0; b < bands.bands(); ++b) ++parts[size_t(bands.band(b).y0 - crop.y0) / kRows];
+        for (size_t k = 0; k < base; ++k) {
+            const int rows = std::min(kRows, crop.y1 - (crop.y0 + int(k) * kRows));
+            const uint64_t want = std::clamp<uint64_t>((count[k] * uint64_t(workers) + total - 1) / total, 1, uint64_t(rows));
+            EXPECT_EQ(parts[k], want) << "base band " << k;
+        }
+        if (workers == 2) {
+            EXPECT_EQ(bands.bands(), base + 1);  // only the heavy band, in two
+        }
+        if (workers == 16) {
+            EXPECT_EQ(parts[2], 8u);  // the heavy band, a row each
+        }
+        // The next batch, on the new cut: the same sums, bit for bit.
+        EXPECT_TRUE(merge_matches(bands));
+        bands.relayout(workers);
+        expect_cover(bands, crop, kRows);
+        EXPECT_TRUE(merge_matches(bands));
+    }
 }
 
 }  // namespace
