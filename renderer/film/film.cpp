@@ -1,5 +1,6 @@
 #include "film/film.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -72,20 +73,39 @@ PixelStats Film::pixel(int x, int y) const {
 }
 
 ErrorEstimate Film::estimate_error(double eps) const {
+    std::vector<ErrorPart> parts(error_parts());
+    for (size_t c = 0; c < parts.size(); ++c) parts[c] = error_part(c, eps);
+    return error_of(parts);
+}
+
+Film::ErrorPart Film::error_part(size_t chunk, double eps) const {
+    ErrorPart e;
+    const size_t end = std::min(px_.size(), (chunk + 1) * kErrorChunk);
+    for (size_t i = chunk * kErrorChunk; i < end; ++i) {
+        const Accum& a = px_[i];
+        const double m = (a.mean[0] + a.mean[1] + a.mean[2]) / 3.0;
+        e.mean += m;
+        if (a.n < 2) {
+            e.unknown = true;
+            continue;
+        }
+        const double v = (a.m2[0] + a.m2[1] + a.m2[2]) / (3.0 * a.w * double(a.n - 1));
+        e.var += v;
+        e.rel += std::sqrt(v) / std::max(m, eps);
+    }
+    return e;
+}
+
+ErrorEstimate Film::error_of(std::span<const ErrorPart> parts) const {
     ErrorEstimate e;
     if (px_.empty()) return e;
     double sum_rel = 0, sum_mean = 0, sum_var = 0;
     bool unknown = false;
-    for (const Accum& a : px_) {
-        const double m = (a.mean[0] + a.mean[1] + a.mean[2]) / 3.0;
-        sum_mean += m;
-        if (a.n < 2) {
-            unknown = true;
-            continue;
-        }
-        const double v = (a.m2[0] + a.m2[1] + a.m2[2]) / (3.0 * a.w * double(a.n - 1));
-        sum_var += v;
-        sum_rel += std::sqrt(v) / std::max(m, eps);
+    for (const ErrorPart& p : parts) {
+        sum_rel += p.rel;
+        sum_mean += p.mean;
+        sum_var += p.var;
+        unknown = unknown || p.unknown;
     }
     const double N = double(px_.size());
     e.image_mean = sum_mean / N;

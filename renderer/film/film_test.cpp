@@ -241,6 +241,39 @@ TEST(Film, EstimateErrorTracksTrueError) {
     EXPECT_NEAR(e.image_mean, 1.0, 5 * sd_mean / 16);
 }
 
+TEST(Film, ErrorInChunksIsTheErrorWhateverOrderTheChunksRan) {
+    // 3 chunks and a part, with one pixel of fewer than two samples in the last chunk only.
+    const int w = 301, h = 170;
+    Film f(desc(w, h));
+    ASSERT_EQ(f.error_parts(), 4u);
+    double rel = 0, mean = 0, var = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            Rng rng = Rng::for_sample(5, uint64_t(y * w + x), 0);
+            const float a = 1.f + rng.next_1d(), b = rng.next_1d();
+            f.add_sample(x, y, Rgb(a));
+            f.add_sample(x, y, Rgb(b));
+            const double m = (double(a) + double(b)) / 2, v = (double(a) - double(b)) * (double(a) - double(b)) / 2;
+            mean += m;
+            var += v / 2;
+            rel += std::sqrt(v / 2) / std::max(m, 1e-2);
+        }
+    const double N = double(w) * h;
+    const ErrorEstimate e = f.estimate_error();
+    EXPECT_NEAR(e.mean_rel_error, rel / N, 1e-12 * rel / N);
+    EXPECT_NEAR(e.image_mean, mean / N, 1e-12 * mean / N);
+    EXPECT_NEAR(e.image_mean_stderr, std::sqrt(var) / N, 1e-12 * std::sqrt(var) / N);
+    // The chunks computed last to first (as workers might) add up to the same bits.
+    std::vector<Film::ErrorPart> parts(f.error_parts());
+    for (size_t c = parts.size(); c-- > 0;) parts[c] = f.error_part(c);
+    const ErrorEstimate g = f.error_of(parts);
+    EXPECT_EQ(std::memcmp(&e, &g, sizeof e), 0);
+    // A pixel with one sample, in the last chunk alone, still makes the error unknown.
+    f.set_state(w - 1, h - 1, PixelState{});
+    f.add_sample(w - 1, h - 1, Rgb(1.f));
+    EXPECT_TRUE(std::isinf(f.estimate_error().mean_rel_error));
+}
+
 TEST(Film, ConcurrentWritersOnSeparateTiles) {
     // Each worker owns a tile, as the renderer guarantees; the result must equal a serial run.
     const FilmDesc d = desc(40, 24);

@@ -253,6 +253,21 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
     }
 }
 
+ErrorEstimate RenderSession::estimate_error(tbb::task_arena& arena) {
+    error_parts_.resize(film_.error_parts());
+    if (probe_) probe_->region_begin("error");
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, error_parts_.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t c = r.begin(); c != r.end(); ++c) {
+                ScheduleProbe::TaskTimer timer(probe_, uint32_t(c));
+                error_parts_[c] = film_.error_part(c);
+            }
+        });
+    });
+    if (probe_) probe_->region_end();
+    return film_.error_of(error_parts_);
+}
+
 void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats) {
     const Sensor& sensor = scene_.sensor();
     const bool lens = sensor.uses_lens_sample();  // asked once, not per sample
@@ -367,7 +382,7 @@ PassReport RenderSession::run(const std::function<void(const PassReport&)>& on_p
         for (const auto& sc : scratch_) report.mis_errors += sc.connect.bad_weights;
         report.samples_per_s = report.elapsed_s > 0 ? double(total.samples) / report.elapsed_s : 0;
         report.rays_per_s = report.elapsed_s > 0 ? double(total.rays) / report.elapsed_s : 0;
-        report.error = film_.estimate_error();
+        report.error = estimate_error(arena);
         if (on_pass) on_pass(report);
 
         if (spp_limit >= 0 && report.spp >= spp_limit) break;

@@ -120,6 +120,8 @@ private:
     long long render_pass_splatting(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long s0, long long s1);
     // One batch of a splatting integrator: sample index i of every pixel, into the film.
     void render_sample_index(tbb::task_arena& arena, const std::vector<Rect>& tiles, long long i);
+    // Driver thread, after a pass: the film's error, its chunks summed on the arena's workers.
+    ErrorEstimate estimate_error(tbb::task_arena& arena);
 
     const Scene& scene_;
     RenderSettings settings_;
@@ -139,6 +141,7 @@ private:
     // one starts the longest first; wave_order_ is a wave's share of that order (driver thread).
     LongestFirst tile_costs_;
     std::vector<uint32_t> wave_order_;
+    std::vector<Film::ErrorPart> error_parts_;  // estimate_error()'s chunk sums (driver thread sizes it)
     // Crop-sized, one batch's camera estimates and light-path splats (allocated and cleared by
     // the driver thread, cleared band by band in parallel). Zeroed pages: a value-initialised
     // vector was written whole by the driver thread alone, every page a fault, before the first

@@ -90,24 +90,29 @@ TEST(ScheduleProbe, RecordsEveryRegionAndTaskOfAOneThreadRender) {
         const ScheduleProbe& p = rec->probe;
         ASSERT_EQ(rec->report.spp, 6);
         const auto kinds = p.predict(1).kinds;
+        // After each pass, the film's error in chunks: one chunk for 1200 pixels.
+        const size_t passes = size_t(rec->report.pass);
         if (type == IntegratorType::Path) {
-            // One region per pass, every tile a task.
-            EXPECT_EQ(p.regions(), size_t(rec->report.pass));
-            EXPECT_EQ(p.tasks(), kTiles * size_t(rec->report.pass));
-            ASSERT_EQ(kinds.size(), 1u);
+            // Per pass, one region of tiles, every tile a task, then the error.
+            EXPECT_EQ(p.regions(), 2 * passes);
+            EXPECT_EQ(p.tasks(), (kTiles + 1) * passes);
+            ASSERT_EQ(kinds.size(), 2u);
             EXPECT_STREQ(kinds[0].kind, "tiles");
+            EXPECT_STREQ(kinds[1].kind, "error");
         } else {
-            // Per batch (sample index): clear the bands, the tiles (one wave), merge, add.
-            EXPECT_EQ(p.regions(), 4u * 6u);
+            // Per batch (sample index): clear the bands, the tiles (one wave), merge, add; per
+            // pass, the error.
+            EXPECT_EQ(p.regions(), 4u * 6u + passes);
             // Each batch cuts its bands for 16 workers (SplatBands::relayout): the first in the
             // 4 base bands, later ones into as many as a row each.
-            EXPECT_GE(p.tasks(), 6u * (kTiles + 3 * kBands));
-            EXPECT_LE(p.tasks(), 6u * (kTiles + 3 * 30u));
-            EXPECT_GT(p.tasks(), 6u * (kTiles + 3 * kBands)) << "no band was cut for 16 workers";
-            ASSERT_EQ(kinds.size(), 3u);
+            EXPECT_GE(p.tasks(), 6u * (kTiles + 3 * kBands) + passes);
+            EXPECT_LE(p.tasks(), 6u * (kTiles + 3 * 30u) + passes);
+            EXPECT_GT(p.tasks(), 6u * (kTiles + 3 * kBands) + passes) << "no band was cut for 16 workers";
+            ASSERT_EQ(kinds.size(), 4u);
             EXPECT_STREQ(kinds[0].kind, "bands");
             EXPECT_STREQ(kinds[1].kind, "tiles");
             EXPECT_STREQ(kinds[2].kind, "merge");
+            EXPECT_STREQ(kinds[3].kind, "error");
         }
         // The replay on one worker is the recorded run; more workers never take longer, and
         // never less than the serial part plus the busy time shared out evenly.
