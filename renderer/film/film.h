@@ -108,9 +108,9 @@ public:
     // mean_rel_error and image_mean_stderr are +inf so that a target-error halt cannot fire.
     ErrorEstimate estimate_error(double eps = 1e-2) const;
     // The same estimate in two steps, so that a caller with workers can share out the first:
-    // error_part(c) sums chunk c (kErrorChunk pixels in row-major order) and error_of() adds
-    // the chunks' sums in chunk order, so the bits are the same however the chunks ran
-    // (estimate_error() is both steps on the calling thread). On one thread a 1024x1024 film
+    // error_part(c) sums chunk c (kErrorChunk pixels in row-major order; 16 chunks at 256x256,
+    // enough for 16 workers) and error_of() adds the chunks' sums in chunk order, so the bits
+    // are the same however the chunks ran (estimate_error() is both steps on one thread). On one thread a 1024x1024 film
     // took about 25 ms, once a pass, while every other worker waited.
     // Concurrency: error_part() is const and reads only its chunk; call it while nothing adds
     // to the film.
@@ -118,7 +118,7 @@ public:
         double rel = 0, mean = 0, var = 0;
         bool unknown = false;  // a pixel with fewer than 2 samples
     };
-    static constexpr size_t kErrorChunk = 16384;
+    static constexpr size_t kErrorChunk = 4096;
     size_t error_parts() const { return (px_.size() + kErrorChunk - 1) / kErrorChunk; }
     ErrorPart error_part(size_t chunk, double eps = 1e-2) const;
     ErrorEstimate error_of(std::span<const ErrorPart> parts) const;
