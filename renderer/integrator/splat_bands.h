@@ -132,10 +132,10 @@ public:
     template <class Fn>
     // Each band's task also counts its splats, for relayout().
     void merge(tbb::task_arena& arena, const Filter& filter, const std::vector<BandedSplats>& tiles, Fn&& fn) {
-        // In band order, not heaviest first (integrator/ordered_dispatch.h): where the light
-        // itself is in view, every light path splats onto its few rows and that band is a
-        // quarter of the merge, so on 16 workers the merge waits for it either way (schedule
-        // model: 15% and 13% idle), and on 2 cores the reordered merge ran 2-3% slower.
+        // In band order, not heaviest first (integrator/ordered_dispatch.h): with 8-row bands
+        // and the light in view, one band was a quarter of the merge, and on 16 workers the
+        // merge waited for it in either order (schedule model: 15% and 13% idle), while on 2
+        // cores the reordered merge ran 2-3% slower. relayout() cuts such a band instead.
         if (probe_) probe_->region_begin("merge");
         arena.execute([&] {
             tbb::parallel_for(tbb::blocked_range<size_t>(0, bands(), 1), [&](const tbb::blocked_range<size_t>& r) {
