@@ -15,6 +15,7 @@
 // Concurrency: for_each_ordered() is called by the driver thread; fn runs on the arena's workers,
 // each item once. LongestFirst is driver-only, except record(), which workers call for distinct
 // items during a region (order() reads the costs only between regions).
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -24,7 +25,26 @@
 #include <numeric>
 #include <vector>
 
+#include "integrator/schedule_probe.h"
+
 namespace omega {
+
+// fn(i) for every i in [0, n), in parallel in TBB's order (items of similar cost, or ones whose
+// order gained nothing: the splat bands, the film's error chunks). With a probe, one region of
+// `kind` with a task per item (bench only; see RenderSession::set_schedule_probe).
+template <class Fn>
+void for_each_index(tbb::task_arena& arena, size_t n, ScheduleProbe* probe, const char* kind, Fn&& fn) {
+    if (probe) probe->region_begin(kind);
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                ScheduleProbe::TaskTimer timer(probe, uint32_t(i));
+                fn(i);
+            }
+        });
+    });
+    if (probe) probe->region_end();
+}
 
 // fn(item) for every item of `order`, in that order of starting; fn returns false to stop its
 // worker taking more (a pass cut at its time limit), and the others stop at their next item.

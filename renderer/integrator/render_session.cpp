@@ -1,8 +1,6 @@
 #include "integrator/render_session.h"
 
-#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -255,16 +253,7 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
 
 ErrorEstimate RenderSession::estimate_error(tbb::task_arena& arena) {
     error_parts_.resize(film_.error_parts());
-    if (probe_) probe_->region_begin("error");
-    arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, error_parts_.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t c = r.begin(); c != r.end(); ++c) {
-                ScheduleProbe::TaskTimer timer(probe_, uint32_t(c));
-                error_parts_[c] = film_.error_part(c);
-            }
-        });
-    });
-    if (probe_) probe_->region_end();
+    for_each_index(arena, error_parts_.size(), probe_, "error", [&](size_t c) { error_parts_[c] = film_.error_part(c); });
     return film_.error_of(error_parts_);
 }
 

@@ -10,8 +10,6 @@
 // Concurrency: merge() and for_each_band() are called on the driver thread, inside nothing; the
 // callbacks run on the arena's workers, never two at once for the same pixel. bucket() is
 // const and writes only its `out`: any worker, one tile each.
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -22,6 +20,7 @@
 #include "film/film.h"
 #include "film/filter.h"
 #include "integrator/bdpt_tracer.h"
+#include "integrator/ordered_dispatch.h"
 #include "integrator/schedule_probe.h"
 
 namespace omega {
@@ -91,16 +90,7 @@ public:
     // fn(band_rect) for every band, in parallel.
     template <class Fn>
     void for_each_band(tbb::task_arena& arena, Fn&& fn) const {
-        if (probe_) probe_->region_begin("bands");
-        arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, bands(), 1), [&](const tbb::blocked_range<size_t>& r) {
-                for (size_t b = r.begin(); b != r.end(); ++b) {
-                    ScheduleProbe::TaskTimer timer(probe_, uint32_t(b));
-                    fn(band(b));
-                }
-            });
-        });
-        if (probe_) probe_->region_end();
+        for_each_index(arena, bands(), probe_, "bands", [&](size_t b) { fn(band(b)); });
     }
 
     // Any thread: lists one tile's splats (in their order) under every band their filter
@@ -136,24 +126,17 @@ public:
         // and the light in view, one band was a quarter of the merge, and on 16 workers the
         // merge waited for it in either order (schedule model: 15% and 13% idle), while on 2
         // cores the reordered merge ran 2-3% slower. relayout() cuts such a band instead.
-        if (probe_) probe_->region_begin("merge");
-        arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, bands(), 1), [&](const tbb::blocked_range<size_t>& r) {
-                for (size_t b = r.begin(); b != r.end(); ++b) {
-                    ScheduleProbe::TaskTimer timer(probe_, uint32_t(b));
-                    const Rect rows = band(b);
-                    for (const BandedSplats& t : tiles) {
-                        if (t.start.empty()) continue;  // a tile that did not run
-                        merged_[b] += t.start[b + 1] - t.start[b];
-                        for (uint32_t k = t.start[b], e = t.start[b + 1]; k < e; ++k) {
-                            const Splat& sp = t.by_band[k];
-                            for_each_filter_pixel(filter, rows, sp.film, [&](int x, int y, double f) { fn(sp, x, y, f); });
-                        }
-                    }
+        for_each_index(arena, bands(), probe_, "merge", [&](size_t b) {
+            const Rect rows = band(b);
+            for (const BandedSplats& t : tiles) {
+                if (t.start.empty()) continue;  // a tile that did not run
+                merged_[b] += t.start[b + 1] - t.start[b];
+                for (uint32_t k = t.start[b], e = t.start[b + 1]; k < e; ++k) {
+                    const Splat& sp = t.by_band[k];
+                    for_each_filter_pixel(filter, rows, sp.film, [&](int x, int y, double f) { fn(sp, x, y, f); });
                 }
-            });
+            }
         });
-        if (probe_) probe_->region_end();
     }
 
     static constexpr int kBandRows = 8;
