@@ -107,16 +107,24 @@ TEST(SplatBands, HeavyBandsAreCutPerWorkerAndTheMergeStaysBitIdentical) {
     for (const auto& list : tiles)
         for (const Splat& sp : list)
             for_each_filter_pixel(filter, crop, sp.film, [&](int x, int y, double f) { serial[at(x, y)] += Vec3d(sp.value) * f; });
-    // What a merge on base bands counts: each splat once per base band its footprint reaches.
+    // What a merge on `bands` counts, per base band: each splat once per band its footprint
+    // reaches.
     const size_t base = size_t(crop.height() + kRows - 1) / kRows;
-    std::vector<uint64_t> count(base, 0);
-    uint64_t total = 0;
-    for (const auto& list : tiles)
-        for (const Splat& sp : list) {
-            const auto [ya, yb] = filter_span(sp.film.y, filter.radius(), crop.y0, crop.y1);
-            if (ya > yb) continue;
-            for (int k = (ya - crop.y0) / kRows; k <= (yb - crop.y0) / kRows; ++k, ++total) ++count[size_t(k)];
-        }
+    auto counted = [&](const SplatBands& bands) {
+        std::vector<uint64_t> count(base, 0);
+        uint64_t total = 0;
+        for (const auto& list : tiles)
+            for (const Splat& sp : list) {
+                const auto [ya, yb] = filter_span(sp.film.y, filter.radius(), crop.y0, crop.y1);
+                for (size_t b = 0; b < bands.bands(); ++b) {
+                    const Rect r = bands.band(b);
+                    if (r.y0 > yb || r.y1 <= ya) continue;
+                    ++count[size_t(r.y0 - crop.y0) / kRows];
+                    ++total;
+                }
+            }
+        return std::pair{count, total};
+    };
     tbb::task_arena arena(3);
     auto merge_matches = [&](SplatBands& bands) {
         std::vector<BandedSplats> bucketed(tiles.size());
@@ -129,9 +137,13 @@ TEST(SplatBands, HeavyBandsAreCutPerWorkerAndTheMergeStaysBitIdentical) {
     for (int workers : {1, 2, 4, 16}) {
         SCOPED_TRACE(workers);
         SplatBands bands(crop, filter.radius(), kRows);
-        bands.relayout(workers);  // nothing merged yet: the base cut stays
-        ASSERT_EQ(bands.bands(), base);
+        // Nothing merged yet: the base cut stays where no band would be cut for lack of
+        // workers, and beyond 2 workers every band is one row.
+        bands.relayout(workers);
+        ASSERT_EQ(bands.bands(), workers > 2 ? size_t(crop.height()) : base);
+        expect_cover(bands, crop, kRows);
         ASSERT_TRUE(merge_matches(bands));
+        const auto [count, total] = counted(bands);
         bands.relayout(workers);
         expect_cover(bands, crop, kRows);
         // Each base band in ceil(share * workers) parts, at most one a row.
