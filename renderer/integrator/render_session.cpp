@@ -122,12 +122,10 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
     }
     // Driver thread, nothing in flight: the bands this batch's splats go to.
     bands_->relayout(probe_ ? ScheduleProbe::kLayoutWorkers : arena.max_concurrency());
-    bands_->for_each_band(arena, [&](const Rect& r) {
-        for (int y = r.y0; y < r.y1; ++y) {  // a band may be a strip of its rows' columns
-            const size_t a = index(r.x0, y), b = a + size_t(r.width());
-            std::fill(sums.begin() + a, sums.begin() + b, Vec3d(0.0));
-            std::fill(splats.begin() + a, splats.begin() + b, Vec3d(0.0));
-        }
+    bands_->for_each_band(arena, [&](const Rect& rows) {
+        const size_t a = index(rows.x0, rows.y0), b = a + size_t(rows.area());
+        std::fill(sums.begin() + a, sums.begin() + b, Vec3d(0.0));
+        std::fill(splats.begin() + a, splats.begin() + b, Vec3d(0.0));
     });
     AovImages* aovs = aovs_.get();
     if (aovs) aovs->begin_batch();
@@ -223,9 +221,9 @@ void RenderSession::render_sample_index(tbb::task_arena& arena, const std::vecto
     if (aborted()) return;
     if (!pass_cut_.load(std::memory_order_relaxed)) {
         // Pixels are independent here: the bands add them in parallel.
-        bands_->for_each_band(arena, [&](const Rect& r) {
-            for (int y = r.y0; y < r.y1; ++y)
-                for (int x = r.x0; x < r.x1; ++x) {
+        bands_->for_each_band(arena, [&](const Rect& rows) {
+            for (int y = rows.y0; y < rows.y1; ++y)
+                for (int x = rows.x0; x < rows.x1; ++x) {
                     film_.add_weighted(x, y, sums[index(x, y)] + splats[index(x, y)], 1.0);
                     if (aovs) aovs->add_batch(index(x, y), nullptr);
                 }
