@@ -1,6 +1,6 @@
 // bench/throughput [SCENE] [SPP] [N] [REPEATS] [SIZE]: renders a scene (default: the Cornell box)
-// at SIZE x SIZE (default 256) with max_depth 9 and prints samples/s and rays/s for 1, 2, 4, ... N threads (N: every
-// hardware thread), with the speedup over 1 thread next to Embree's own, and each rate against
+// at SIZE x SIZE (default 256) with max_depth 9 and prints samples/s and rays/s for 1, 2, 4, ...
+// N threads (N: every hardware thread), with the speedup over 1 thread next to Embree's own, and each rate against
 // Embree's raw rate for incoherent rays on the same BVH at the same thread count, all in the same
 // run, and the rate of a bare one-ray-at-a-time loop on the same BVH (the ceiling of that design),
 // with what batching 8 paths' rays into Embree packets would gain on that loop and on raw rays.

@@ -110,8 +110,8 @@ public:
     // The same estimate in two steps, so that a caller with workers can share out the first:
     // error_part(c) sums chunk c (kErrorChunk pixels in row-major order; 16 chunks at 256x256,
     // enough for 16 workers) and error_of() adds the chunks' sums in chunk order, so the bits
-    // are the same however the chunks ran (estimate_error() is both steps on one thread). On one thread a 1024x1024 film
-    // took about 25 ms, once a pass, while every other worker waited.
+    // are the same however the chunks ran (estimate_error() is both steps on one thread). On
+    // one thread a 1024x1024 film took about 25 ms, once a pass, while every other worker waited.
     // Concurrency: error_part() is const and reads only its chunk; call it while nothing adds
     // to the film.
     struct ErrorPart {

@@ -3,8 +3,8 @@
 // on more cores than the machine at hand (bench/throughput; issue 12 asks for 1 -> 16 threads).
 //
 // A RenderSession running on ONE thread reports each parallel region (a pass's tiles, a batch's
-// splat bands, a pass's error sums) and the duration of each of its tasks; the time outside regions, and inside them
-// but outside tasks (spawning, the driver's own work), is serial. predict(N) replays the record
+// splat bands, a pass's error sums) and the duration of each of its tasks; the time outside
+// regions, and inside them but outside tasks (spawning, the driver's own work), is serial. predict(N) replays the record
 // on N workers: a region takes the makespan of its tasks handed out in order, each to the worker
 // that frees first (TBB's dynamic scheduling, idealised), and ends at a barrier; serial time
 // stays as it was. What the model leaves out is everything threads share in hardware (memory

@@ -77,7 +77,7 @@ public:
             // (Cornell light 256x256, schedule model @16: the merge's idle time 5.2% -> 3.1%),
             // and in a render of few batches that one is a large part. The cost, more copies
             // of the splats that span two rows, is paid for one batch.
-            if (workers > 2) cut_rows(1);
+            if (workers > 2 && bands() != size_t(std::max(0, crop_.height()))) cut_rows(1);
             return;
         }
         y0_.clear();
@@ -125,9 +125,8 @@ public:
     }
 
     // fn(splat, x, y, filter_weight) for every crop pixel each splat of `tiles` (bucketed by
-    // bucket(), in merge order) reaches.
+    // bucket(), in merge order) reaches. Each band's task also counts its splats, for relayout().
     template <class Fn>
-    // Each band's task also counts its splats, for relayout().
     void merge(tbb::task_arena& arena, const Filter& filter, const std::vector<BandedSplats>& tiles, Fn&& fn) {
         // In band order, not heaviest first (integrator/ordered_dispatch.h): with 8-row bands
         // and the light in view, one band was a quarter of the merge, and on 16 workers the
