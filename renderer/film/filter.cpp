@@ -90,14 +90,7 @@ double Filter::sample_1d(double u) const {
     double x = 0;
     switch (type_) {
         case FilterType::Box: x = (2.0 * u - 1.0) * r; break;
-        case FilterType::Tent: {
-            // Inverse CDF of each half, in double so it matches pdf_1d to rounding. The half is
-            // a coin flip per sample: selects, not a branch.
-            const bool left = u < 0.5;
-            const double root = std::sqrt(select_bits(left, 2.0 * u, 2.0 - 2.0 * u));
-            x = r * select_bits(left, -1.0 + root, 1.0 - root);
-            break;
-        }
+        case FilterType::Tent: x = tent_offset(float(u), radius_); break;  // sample() inlines it
         case FilterType::Gaussian:
             // Exact inverse CDF of the truncated Gaussian: one uniform per axis, weight 1, no
             // rejection, so no extra random numbers are needed.
@@ -108,7 +101,7 @@ double Filter::sample_1d(double u) const {
     return std::clamp(x, -r, r);
 }
 
-Vec2 Filter::sample(Vec2 u) const {
+Vec2 Filter::sample_other(Vec2 u) const {
     return {float(sample_1d(u.x)), float(sample_1d(u.y))};
 }
 
