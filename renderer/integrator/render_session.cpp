@@ -272,8 +272,10 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
     for (int y = tile.y0; y < tile.y1; ++y) {
         for (int x = tile.x0; x < tile.x1; ++x) {
             uint64_t pixel = uint64_t(y) * width + uint64_t(x);
+            uint64_t key = Sampler::sobol_key(settings_.seed, pixel, uint64_t(s0));
             for (long long i = s0; i < s1; ++i) {
-                Sampler sampler = Sampler::make(settings_.integrator.sampler, settings_.seed, pixel, uint64_t(i));
+                if ((uint64_t(i) & 0xffffffffu) == 0) key = Sampler::sobol_key(settings_.seed, pixel, uint64_t(i));
+                Sampler sampler = Sampler::make(settings_.integrator.sampler, settings_.seed, pixel, uint64_t(i), key);
                 sampler.start_dimension(dims::kFilm);
                 Vec2 u_film = sampler.next_2d();
                 sampler.start_dimension(dims::kLens);

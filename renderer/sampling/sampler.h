@@ -167,6 +167,13 @@ public:
     explicit Sampler(Rng rng) : type_(SamplerType::Independent), rng_(rng) {}
 
     static Sampler make(SamplerType type, uint64_t seed, uint64_t stream, uint64_t index) {
+        return make(type, seed, stream, index, sobol_key(seed, stream, index));
+    }
+    // The sobol sampler's hash of (seed, stream, index / 2^32): the same for every sample of a
+    // stream below 2^32, so a loop over one pixel's samples computes it once (make(..., key)).
+    static uint64_t sobol_key(uint64_t seed, uint64_t stream, uint64_t index) { return hash3(seed, stream, index >> 32); }
+    // make() with `key` = sobol_key(seed, stream, index), already computed.
+    static Sampler make(SamplerType type, uint64_t seed, uint64_t stream, uint64_t index, uint64_t key) {
         if (type == SamplerType::Independent) return Sampler(Rng::for_sample(seed, stream, index));
         // Past 2^32 samples the Sobol' index wraps; the upper bits then go into the hash, so
         // every block of 2^32 samples is a fresh randomisation (still unbiased).
@@ -180,7 +187,7 @@ public:
         s.beyond_index_ = index;
         s.rng_ready_ = false;
         s.index_reversed_ = sobol::reverse_bits(uint32_t(index));
-        s.key_ = hash3(seed, stream, index >> 32);
+        s.key_ = key;
         return s;
     }
 

@@ -82,7 +82,8 @@ Ray Sensor::generate_ray(Vec2 film, Vec2 u_lens) const {
         o_local = {q.x, q.y, 0.f};
         d_local = {0.f, 0.f, 1.f};
     }
-    Vec3 o = local_point(o_local);
+    // A pinhole's origin is local_origin, the same bits as local_point of zero.
+    Vec3 o = std::holds_alternative<PerspectiveSensor>(model) ? local_origin : local_point(o_local);
     Vec3 d = normalize(Vec3{m[0] * d_local.x + m[1] * d_local.y + m[2] * d_local.z,
                             m[4] * d_local.x + m[5] * d_local.y + m[6] * d_local.z,
                             m[8] * d_local.x + m[9] * d_local.y + m[10] * d_local.z});
