@@ -171,7 +171,9 @@ public:
     }
     // The sobol sampler's hash of (seed, stream, index / 2^32): the same for every sample of a
     // stream below 2^32, so a loop over one pixel's samples computes it once (make(..., key)).
-    static uint64_t sobol_key(uint64_t seed, uint64_t stream, uint64_t index) { return hash3(seed, stream, index >> 32); }
+    static uint64_t sobol_key(uint64_t seed, uint64_t stream, uint64_t index) {
+        return hash3(seed, stream, index >> 32);
+    }
     // make() with `key` = sobol_key(seed, stream, index), already computed.
     static Sampler make(SamplerType type, uint64_t seed, uint64_t stream, uint64_t index, uint64_t key) {
         if (type == SamplerType::Independent) return Sampler(Rng::for_sample(seed, stream, index));
