@@ -1,15 +1,15 @@
 // bench/throughput [SCENE] [SPP] [N] [REPEATS] [SIZE]: renders a scene (default: the Cornell box)
-// at SIZE x SIZE (default 256) with max_depth 9 and prints samples/s and rays/s for 1, 2, 4, ...
-// N threads (N: every hardware thread), with the speedup over 1 thread next to Embree's own, and each rate against
-// Embree's raw rate for incoherent rays on the same BVH at the same thread count, all in the same
-// run, and the rate of a bare one-ray-at-a-time loop on the same BVH (the ceiling of that design),
-// with what batching 8 paths' rays into Embree packets would gain on that loop and on raw rays.
-// Last, for each integrator, the speedup on 2 to 16 threads that its schedule alone allows
-// (barriers, imbalance, serial parts; integrator/schedule_probe.h), recorded on one thread, next
-// to the speedup measured here: the figure issue 12 asks for on machines this one cannot show.
+// at SIZE x SIZE (default 256) with max_depth 9 and prints samples/s and rays/s for 1, 2, 4, ... N
+// threads (N: every hardware thread), with the speedup over 1 thread next to Embree's own, and each
+// rate against Embree's raw rate for incoherent rays on the same BVH at the same thread count, all
+// in the same run, and the rate of a bare one-ray-at-a-time loop on the same BVH (the ceiling of
+// that design), with what batching 8 paths' rays into Embree packets would gain on that loop and on
+// raw rays. Last, for each integrator, the speedup on 2 to 16 threads that its schedule alone
+// allows (barriers, imbalance, serial parts; integrator/schedule_probe.h), recorded on one thread,
+// next to the speedup measured here: the figure issue 12 asks for on machines this one cannot show.
 // Every figure is the median of REPEATS (default 3) measurements, each renderer run alternating
-// with an Embree run; a ratio is the median of those pairs' ratios, with their range beside it,
-// so one disturbed run on a shared machine neither moves the figure nor goes unseen.
+// with an Embree run; a ratio is the median of those pairs' ratios, with their range beside it, so
+// one disturbed run on a shared machine neither moves the figure nor goes unseen.
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

@@ -264,6 +264,7 @@ ErrorEstimate RenderSession::estimate_error(tbb::task_arena& arena) {
 void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, TracerStats& stats) {
     const Sensor& sensor = scene_.sensor();
     const bool lens = sensor.uses_lens_sample();  // asked once, not per sample
+    const bool sobol = settings_.integrator.sampler == SamplerType::Sobol;
     std::optional<CameraLpeTracker> lpe;
     if (aovs_) lpe.emplace(aovs_->lpes());
     std::optional<PathClassTracker> classes;
@@ -272,9 +273,11 @@ void RenderSession::render_tile(const Rect& tile, long long s0, long long s1, Tr
     for (int y = tile.y0; y < tile.y1; ++y) {
         for (int x = tile.x0; x < tile.x1; ++x) {
             uint64_t pixel = uint64_t(y) * width + uint64_t(x);
-            uint64_t key = Sampler::sobol_key(settings_.seed, pixel, uint64_t(s0));
+            uint64_t key = 0;
             for (long long i = s0; i < s1; ++i) {
-                if ((uint64_t(i) & 0xffffffffu) == 0) key = Sampler::sobol_key(settings_.seed, pixel, uint64_t(i));
+                // The sobol key changes only where the index crosses a multiple of 2^32.
+                if (sobol && (i == s0 || (uint64_t(i) & 0xffffffffu) == 0))
+                    key = Sampler::sobol_key(settings_.seed, pixel, uint64_t(i));
                 Sampler sampler = Sampler::make(settings_.integrator.sampler, settings_.seed, pixel, uint64_t(i), key);
                 sampler.start_dimension(dims::kFilm);
                 Vec2 u_film = sampler.next_2d();

@@ -4,13 +4,13 @@
 //
 // A RenderSession running on ONE thread reports each parallel region (a pass's tiles, a batch's
 // splat bands, a pass's error sums) and the duration of each of its tasks; the time outside
-// regions, and inside them but outside tasks (spawning, the driver's own work), is serial. predict(N) replays the record
-// on N workers: a region takes the makespan of its tasks handed out in order, each to the worker
-// that frees first (TBB's dynamic scheduling, idealised), and ends at a barrier; serial time
-// stays as it was. What the model leaves out is everything threads share in hardware (memory
-// bandwidth, caches, SMT siblings, clock boost), so its speedup is an upper bound: a measured
-// speedup below it points at the hardware, one at it at the schedule (barriers, imbalance,
-// serial parts).
+// regions, and inside them but outside tasks (spawning, the driver's own work), is serial.
+// predict(N) replays the record on N workers: a region takes the makespan of its tasks handed out
+// in order, each to the worker that frees first (TBB's dynamic scheduling, idealised), and ends at
+// a barrier; serial time stays as it was. What the model leaves out is everything threads share in
+// hardware (memory bandwidth, caches, SMT siblings, clock boost), so its speedup is an upper bound:
+// a measured speedup below it points at the hardware, one at it at the schedule (barriers,
+// imbalance, serial parts).
 //
 // Concurrency: every call comes from the session's one worker or its driver thread, never two
 // at once (a one-thread arena runs tasks on the calling thread).

@@ -167,14 +167,15 @@ public:
     explicit Sampler(Rng rng) : type_(SamplerType::Independent), rng_(rng) {}
 
     static Sampler make(SamplerType type, uint64_t seed, uint64_t stream, uint64_t index) {
-        return make(type, seed, stream, index, sobol_key(seed, stream, index));
+        return make(type, seed, stream, index, type == SamplerType::Sobol ? sobol_key(seed, stream, index) : 0);
     }
     // The sobol sampler's hash of (seed, stream, index / 2^32): the same for every sample of a
     // stream below 2^32, so a loop over one pixel's samples computes it once (make(..., key)).
     static uint64_t sobol_key(uint64_t seed, uint64_t stream, uint64_t index) {
         return hash3(seed, stream, index >> 32);
     }
-    // make() with `key` = sobol_key(seed, stream, index), already computed.
+    // make() with `key` = sobol_key(seed, stream, index), already computed (the independent
+    // sampler ignores it).
     static Sampler make(SamplerType type, uint64_t seed, uint64_t stream, uint64_t index, uint64_t key) {
         if (type == SamplerType::Independent) return Sampler(Rng::for_sample(seed, stream, index));
         // Past 2^32 samples the Sobol' index wraps; the upper bits then go into the hash, so

@@ -9,6 +9,29 @@ namespace {
 
 SceneDesc small_scene() { return test::metal_cube_scene(40, 30); }
 
+// A session's settings on 2 threads for the scene's integrator.
+RenderSettings settings(const SceneDesc& d, uint64_t seed) {
+    RenderSettings rs;
+    rs.seed = seed;
+    rs.threads = 2;
+    rs.integrator = d.integrator;
+    return rs;
+}
+
+// Samples [rs.first_sample, split) in one session, then [split, end) in a second one resumed
+// from the first's film, as a checkpoint does.
+Film render_resumed(const Scene& scene, const SceneDesc& d, RenderSettings rs, long long split, long long end) {
+    rs.halt.spp = split;
+    RenderSession first(scene, rs);
+    first.run();
+    rs.first_sample = split;
+    rs.halt.spp = end;
+    RenderSession second(scene, rs);
+    second.film() = Film::deserialize(d.sensor.film, first.film().serialize());
+    second.run();
+    return second.film();
+}
+
 TEST(Determinism, SameImageForAnyThreadCountAndTileSize) {
     SceneDesc d = small_scene();
     auto one = test::render(d, 8, 42, 1, 32);
@@ -41,19 +64,8 @@ TEST(Determinism, ResumedRangesMergeExactly) {
             d.integrator.max_depth = 5;
             auto whole = test::render(d, 24, 5, 2);
             auto scene = Scene::build(d);
-            RenderSettings rs;
-            rs.seed = 5;
-            rs.threads = 2;
-            rs.integrator = d.integrator;
-            rs.halt.spp = 5;
-            RenderSession first(*scene, rs);
-            first.run();
-            rs.first_sample = 5;
-            rs.halt.spp = 24;
-            RenderSession second(*scene, rs);
-            second.film() = Film::deserialize(d.sensor.film, first.film().serialize());  // as a checkpoint does
-            second.run();
-            EXPECT_TRUE(test::same_bits(whole.film(), second.film())) << integrator_name(type) << " " << sampler_name(sampler);
+            const Film resumed = render_resumed(*scene, d, settings(d, 5), 5, 24);
+            EXPECT_TRUE(test::same_bits(whole.film(), resumed)) << integrator_name(type) << " " << sampler_name(sampler);
             EXPECT_GT(whole.film().pixel(20, 15).var_of_mean.x, 0.0) << integrator_name(type);
         }
     }
@@ -68,23 +80,12 @@ TEST(Determinism, ARangeAcrossTwoToThe32EqualsItsHalves) {
     SceneDesc d = small_scene();
     d.integrator.max_depth = 4;
     auto scene = Scene::build(d);
-    RenderSettings rs;
-    rs.seed = 9;
-    rs.threads = 2;
-    rs.integrator = d.integrator;
+    RenderSettings rs = settings(d, 9);
     rs.first_sample = k32 - 2;
     rs.halt.spp = k32 + 2;
     RenderSession whole(*scene, rs);
     whole.run();
-    rs.halt.spp = k32;
-    RenderSession first(*scene, rs);
-    first.run();
-    rs.first_sample = k32;
-    rs.halt.spp = k32 + 2;
-    RenderSession second(*scene, rs);
-    second.film() = Film::deserialize(d.sensor.film, first.film().serialize());
-    second.run();
-    EXPECT_TRUE(test::same_bits(whole.film(), second.film()));
+    EXPECT_TRUE(test::same_bits(whole.film(), render_resumed(*scene, d, rs, k32, k32 + 2)));
     EXPECT_GT(whole.film().pixel(20, 15).var_of_mean.x, 0.0);
 }
 
